@@ -1,0 +1,10 @@
+# Message and service definitions (msg/, srv/).
+file(GLOB GMM_MSG_FILES RELATIVE ${CMAKE_CURRENT_SOURCE_DIR}/msg CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/msg/*.msg)
+file(GLOB GMM_SRV_FILES RELATIVE ${CMAKE_CURRENT_SOURCE_DIR}/srv CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/srv/*.srv)
+if(GMM_MSG_FILES)
+  add_message_files(FILES ${GMM_MSG_FILES})
+endif()
+if(GMM_SRV_FILES)
+  add_service_files(FILES ${GMM_SRV_FILES})
+endif()
+generate_messages(DEPENDENCIES std_msgs geometry_msgs sensor_msgs nav_msgs)

@@ -1,0 +1,20 @@
+# gmm_ros: conversions between ROS messages and core types, parameter loading, and the classes
+# the nodelets build. gmm_localization_nodelets: the nodelet entry points (src/nodelets).
+file(GLOB GMM_ROS_SOURCES CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/src/ros/*.cpp)
+add_library(gmm_ros SHARED ${GMM_ROS_SOURCES})
+target_include_directories(gmm_ros PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/include
+  ${CATKIN_DEVEL_PREFIX}/${CATKIN_GLOBAL_INCLUDE_DESTINATION})
+target_include_directories(gmm_ros SYSTEM PUBLIC ${catkin_INCLUDE_DIRS} ${PCL_INCLUDE_DIRS})
+target_compile_definitions(gmm_ros PUBLIC ${PCL_DEFINITIONS})
+target_link_libraries(gmm_ros PUBLIC gmm_core gmm_sim ${catkin_LIBRARIES} ${PCL_LIBRARIES})
+add_dependencies(gmm_ros ${PROJECT_NAME}_generate_messages_cpp)
+set_target_properties(gmm_ros PROPERTIES
+  LIBRARY_OUTPUT_DIRECTORY ${CATKIN_DEVEL_PREFIX}/${CATKIN_PACKAGE_LIB_DESTINATION})
+
+file(GLOB GMM_NODELET_SOURCES CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/src/nodelets/*.cpp)
+add_library(gmm_localization_nodelets SHARED ${GMM_NODELET_SOURCES})
+target_link_libraries(gmm_localization_nodelets PUBLIC gmm_ros)
+set_target_properties(gmm_localization_nodelets PROPERTIES
+  LIBRARY_OUTPUT_DIRECTORY ${CATKIN_DEVEL_PREFIX}/${CATKIN_PACKAGE_LIB_DESTINATION})
+
+install(TARGETS gmm_ros gmm_localization_nodelets LIBRARY DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION})

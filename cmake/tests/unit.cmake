@@ -1,0 +1,10 @@
+# One gtest binary per test file under test/unit (core and simulator, no ROS master).
+file(GLOB GMM_UNIT_TESTS CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/test/unit/*_test.cpp)
+foreach(test_source ${GMM_UNIT_TESTS})
+  get_filename_component(test_name ${test_source} NAME_WE)
+  catkin_add_gtest(unit_${test_name} ${test_source}
+    WORKING_DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR})
+  target_link_libraries(unit_${test_name} gmm_core gmm_sim gtest_main)
+  target_compile_definitions(unit_${test_name} PRIVATE
+    GMM_SHARED_DATA_DIR="${GMM_SHARED_DATA_DIR}")
+endforeach()

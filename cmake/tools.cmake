@@ -1,0 +1,16 @@
+# Command-line tools (src/tools). gmm_add_tool(name source... LIBS libs...) builds one into the
+# package's devel lib directory, so `rosrun gmm_localization <name>` finds it.
+function(gmm_add_tool name)
+  cmake_parse_arguments(T "" "" "SOURCES;LIBS" ${ARGN})
+  add_executable(${name} ${T_SOURCES})
+  target_link_libraries(${name} ${T_LIBS})
+  set_target_properties(${name} PROPERTIES
+    RUNTIME_OUTPUT_DIRECTORY ${CATKIN_DEVEL_PREFIX}/${CATKIN_PACKAGE_BIN_DESTINATION})
+  install(TARGETS ${name} RUNTIME DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
+endfunction()
+
+# Each area lists its tools in its own file under cmake/tools/.
+file(GLOB GMM_TOOL_FRAGMENTS CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/cmake/tools/*.cmake)
+foreach(fragment ${GMM_TOOL_FRAGMENTS})
+  include(${fragment})
+endforeach()

@@ -1,0 +1,60 @@
+#pragma once
+// One map cell's model: a 1-D Gaussian mixture over z-height (paper section III, Eq. 1).
+
+#include <array>
+#include <cstdint>
+#include <limits>
+
+namespace gmm_localization {
+
+/// Largest number of components a cell can hold. The paper (and our default) uses at most two;
+/// three is allowed for dense vegetation experiments.
+constexpr int kMaxMixtureComponents = 3;
+
+struct GaussianComponent {
+  float weight = 0.f;   ///< mixing weight in (0, 1]; a cell's weights sum to 1
+  float mean_m = 0.f;   ///< mean height in the map frame [m]
+  float sigma_m = 1.f;  ///< standard deviation [m], > 0
+};
+
+/// Mixture p(z) = sum_j w_j N(z; mu_j, sigma_j^2). Empty means "no map data in this cell".
+class GaussianMixture1D {
+ public:
+  GaussianMixture1D() = default;
+
+  int size() const { return count_; }
+  bool empty() const { return count_ == 0; }
+  const GaussianComponent& component(int j) const { return components_[j]; }
+  GaussianComponent& component(int j) { return components_[j]; }
+
+  /// Appends a component; returns false (and changes nothing) when already full.
+  bool add(const GaussianComponent& c) {
+    if (count_ >= kMaxMixtureComponents) return false;
+    components_[count_++] = c;
+    return true;
+  }
+  void clear() { count_ = 0; }
+
+  /// log p(z) with the standard normal density (Eq. 1 of the paper, whose printed exponent lacks
+  /// the 1/2 of a normal density; we use the density). Computed with log-sum-exp so it never
+  /// overflows; returns -infinity for an empty mixture. Requires sigma_m > 0 for all components.
+  double logLikelihood(double z_m) const;
+
+  /// Largest value of log p(z) over z in [z_lo, z_hi] (z_lo <= z_hi), used to rasterize a
+  /// z-bin as an upper bound. Exact for one component; for several it takes the max over the
+  /// interval ends, the component means inside it, and a dense sample refined by golden section.
+  /// Returns -infinity for an empty mixture.
+  double maxLogLikelihood(double z_lo, double z_hi) const;
+
+  /// Mahalanobis distance of z to the nearest component, |z - mu_j| / sigma_j minimised over j
+  /// (infinity for an empty mixture). Used by the obstacle classifier (paper V-C).
+  double mahalanobis(double z_m) const;
+
+  bool operator==(const GaussianMixture1D& o) const;
+
+ private:
+  std::array<GaussianComponent, kMaxMixtureComponents> components_{};
+  uint8_t count_ = 0;
+};
+
+}  // namespace gmm_localization

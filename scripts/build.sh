@@ -1,0 +1,16 @@
+#!/usr/bin/env bash
+# Configures and builds the package (a standalone catkin build of the repository root) into
+# $GMM_WS (default .ws/ inside the repository). Extra arguments go to make (e.g. a target).
+set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/env.sh"
+mkdir -p "$GMM_BUILD"
+if [ ! -f "$GMM_BUILD/Makefile" ]; then
+  cmake -S "$GMM_REPO" -B "$GMM_BUILD" \
+    -DCMAKE_BUILD_TYPE=Release \
+    -DCATKIN_DEVEL_PREFIX="$GMM_DEVEL" \
+    -DCMAKE_INSTALL_PREFIX="$GMM_WS/install" \
+    -DPYTHON_EXECUTABLE=/usr/bin/python3 \
+    -DCATKIN_ENABLE_TESTING=ON >"$GMM_WS/cmake.log" 2>&1 || { cat "$GMM_WS/cmake.log"; exit 1; }
+fi
+JOBS="${GMM_JOBS:-$(nproc)}"
+make -C "$GMM_BUILD" -j"$JOBS" --no-print-directory "$@"

@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# The README's test command: installs what is missing, builds, runs every test tier (unit,
+# ROS-side gtests, rostests with the real launch files) and the static checks. Exit status is
+# non-zero when anything fails.
+set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/env.sh"
+"$GMM_REPO/scripts/install_deps.sh"
+"$GMM_REPO/scripts/check_core_deps.sh"
+"$GMM_REPO/scripts/check_format.sh"
+"$GMM_REPO/scripts/build.sh"
+"$GMM_REPO/scripts/build.sh" tests
+gmm_source_ros
+# run_tests executes every gtest and rostest; catkin_test_results then reports and sets status.
+make -C "$GMM_BUILD" --no-print-directory -j1 run_tests >"$GMM_WS/run_tests.log" 2>&1 || true
+grep -E "^\[ *(RUN|OK|FAILED|SKIPPED|PASSED) *\]|SKIP|rostest|Ran [0-9]+ test" "$GMM_WS/run_tests.log" \
+  | grep -vE "^\[ *(RUN|OK) *\]" || true
+catkin_test_results --verbose "$GMM_BUILD/test_results" | tail -n 40
+catkin_test_results "$GMM_BUILD/test_results" >/dev/null
