@@ -11,6 +11,9 @@ if [ ! -f "$GMM_BUILD/Makefile" ]; then
     -DCMAKE_INSTALL_PREFIX="$GMM_WS/install" \
     -DPYTHON_EXECUTABLE=/usr/bin/python3 \
     -DCATKIN_ENABLE_TESTING=ON >"$GMM_WS/cmake.log" 2>&1 || { cat "$GMM_WS/cmake.log"; exit 1; }
+else
+  # Re-configure (a few seconds) so that new sources and tests are picked up.
+  cmake "$GMM_BUILD" >"$GMM_WS/cmake.log" 2>&1 || { cat "$GMM_WS/cmake.log"; exit 1; }
 fi
 JOBS="${GMM_JOBS:-$(nproc)}"
 make -C "$GMM_BUILD" -j"$JOBS" --no-print-directory "$@"

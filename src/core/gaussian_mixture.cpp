@@ -29,31 +29,33 @@ double GaussianMixture1D::logLikelihood(double z_m) const {
   return peak + std::log(sum);
 }
 
-double GaussianMixture1D::maxLogLikelihood(double z_lo, double z_hi) const {
-  if (count_ == 0) return -std::numeric_limits<double>::infinity();
+std::vector<double> GaussianMixture1D::modes() const {
+  std::vector<double> result;
+  if (count_ == 0) return result;
   if (count_ == 1) {
-    const double mu = components_[0].mean_m;
-    return logLikelihood(std::clamp(mu, z_lo, z_hi));
+    result.push_back(components_[0].mean_m);
+    return result;
   }
-  // The maximum of a mixture lies at an interval end or at a mode. Sample the interval with a
-  // step of at most a quarter of the smallest sigma, then refine every sampled local maximum
-  // (ends included) by golden-section search over the bracket of its two neighbours.
-  double sigma_min = components_[0].sigma_m;
-  for (int j = 1; j < count_; ++j) sigma_min = std::min<double>(sigma_min, components_[j].sigma_m);
+  double lo = components_[0].mean_m, hi = lo, sigma_min = components_[0].sigma_m;
+  for (int j = 1; j < count_; ++j) {
+    lo = std::min<double>(lo, components_[j].mean_m);
+    hi = std::max<double>(hi, components_[j].mean_m);
+    sigma_min = std::min<double>(sigma_min, components_[j].sigma_m);
+  }
+  // Outside [lo, hi] every component pulls towards the interval, so no mode lies there.
   const int samples =
-      static_cast<int>(std::clamp(std::ceil((z_hi - z_lo) / (0.25 * sigma_min)), 2.0, 4096.0));
-  const double step = (z_hi - z_lo) / samples;
+      static_cast<int>(std::clamp(std::ceil((hi - lo) / (0.25 * sigma_min)), 2.0, 1.0e5));
+  const double step = (hi - lo) / samples;
   std::vector<double> v(samples + 1);
-  for (int i = 0; i <= samples; ++i) v[i] = logLikelihood(z_lo + i * step);
-  double best = *std::max_element(v.begin(), v.end());
+  for (int i = 0; i <= samples; ++i) v[i] = logLikelihood(lo + i * step);
   constexpr double kInvPhi = 0.61803398874989484820;
   for (int i = 0; i <= samples; ++i) {
-    const bool left_ok = i == 0 || v[i] >= v[i - 1];
-    const bool right_ok = i == samples || v[i] >= v[i + 1];
-    if (!left_ok || !right_ok) continue;
-    double a = z_lo + std::max(0, i - 1) * step;
-    double b = z_lo + std::min(samples, i + 1) * step;
-    for (int it = 0; it < 80 && b - a > 1e-9; ++it) {
+    const bool rises_to = i == 0 || v[i] > v[i - 1];
+    const bool falls_after = i == samples || v[i] >= v[i + 1];
+    if (!rises_to || !falls_after) continue;
+    double a = lo + std::max(0, i - 1) * step;
+    double b = lo + std::min(samples, i + 1) * step;
+    for (int it = 0; it < 100 && b - a > 1e-9; ++it) {
       const double c = b - (b - a) * kInvPhi;
       const double d = a + (b - a) * kInvPhi;
       if (logLikelihood(c) > logLikelihood(d)) {
@@ -62,7 +64,21 @@ double GaussianMixture1D::maxLogLikelihood(double z_lo, double z_hi) const {
         a = c;
       }
     }
-    best = std::max(best, logLikelihood(0.5 * (a + b)));
+    result.push_back(0.5 * (a + b));
+  }
+  return result;
+}
+
+double GaussianMixture1D::maxLogLikelihood(double z_lo, double z_hi) const {
+  return maxLogLikelihood(z_lo, z_hi, modes());
+}
+
+double GaussianMixture1D::maxLogLikelihood(double z_lo, double z_hi,
+                                           const std::vector<double>& modes) const {
+  if (count_ == 0) return -std::numeric_limits<double>::infinity();
+  double best = std::max(logLikelihood(z_lo), logLikelihood(z_hi));
+  for (double m : modes) {
+    if (m > z_lo && m < z_hi) best = std::max(best, logLikelihood(m));
   }
   return best;
 }
@@ -73,6 +89,32 @@ double GaussianMixture1D::mahalanobis(double z_m) const {
     best = std::min(best, std::abs(z_m - components_[j].mean_m) / components_[j].sigma_m);
   }
   return best;
+}
+
+MixtureLogTerms::MixtureLogTerms(const GaussianMixture1D& g) {
+  count = static_cast<uint8_t>(g.size());
+  for (int j = 0; j < g.size(); ++j) {
+    const GaussianComponent& c = g.component(j);
+    mean[j] = c.mean_m;
+    inv_sigma[j] = 1.0f / c.sigma_m;
+    log_norm[j] = static_cast<float>(std::log(static_cast<double>(c.weight)) -
+                                     std::log(static_cast<double>(c.sigma_m)) - kHalfLog2Pi);
+  }
+}
+
+double MixtureLogTerms::logLikelihood(double z_m) const {
+  if (count == 0) return -std::numeric_limits<double>::infinity();
+  double t[kMaxMixtureComponents];
+  double peak = -std::numeric_limits<double>::infinity();
+  for (int j = 0; j < count; ++j) {
+    const double d = (z_m - mean[j]) * inv_sigma[j];
+    t[j] = log_norm[j] - 0.5 * d * d;
+    peak = std::max(peak, t[j]);
+  }
+  if (count == 1 || !std::isfinite(peak)) return peak;
+  double sum = 0.0;
+  for (int j = 0; j < count; ++j) sum += std::exp(t[j] - peak);
+  return peak + std::log(sum);
 }
 
 bool GaussianMixture1D::operator==(const GaussianMixture1D& o) const {

@@ -4,6 +4,7 @@
 #include <array>
 #include <cstdint>
 #include <limits>
+#include <vector>
 
 namespace gmm_localization {
 
@@ -40,11 +41,16 @@ class GaussianMixture1D {
   /// overflows; returns -infinity for an empty mixture. Requires sigma_m > 0 for all components.
   double logLikelihood(double z_m) const;
 
-  /// Largest value of log p(z) over z in [z_lo, z_hi] (z_lo <= z_hi), used to rasterize a
-  /// z-bin as an upper bound. Exact for one component; for several it takes the max over the
-  /// interval ends, the component means inside it, and a dense sample refined by golden section.
-  /// Returns -infinity for an empty mixture.
+  /// Local maxima of p(z), ascending. One component: its mean. Several: every mode lies between
+  /// the extreme means; they are found by a scan at a quarter of the smallest sigma, each sampled
+  /// local maximum refined by golden-section search. Empty for an empty mixture.
+  std::vector<double> modes() const;
+
+  /// Largest value of log p(z) over z in [z_lo, z_hi] (z_lo <= z_hi): the max over the interval
+  /// ends and the modes inside it. Returns -infinity for an empty mixture.
   double maxLogLikelihood(double z_lo, double z_hi) const;
+  /// The same with the modes already computed (rasterization calls it per z bin).
+  double maxLogLikelihood(double z_lo, double z_hi, const std::vector<double>& modes) const;
 
   /// Mahalanobis distance of z to the nearest component, |z - mu_j| / sigma_j minimised over j
   /// (infinity for an empty mixture). Used by the obstacle classifier (paper V-C).
@@ -55,6 +61,20 @@ class GaussianMixture1D {
  private:
   std::array<GaussianComponent, kMaxMixtureComponents> components_{};
   uint8_t count_ = 0;
+};
+
+/// A mixture prepared for fast repeated evaluation: per component the mean, 1/sigma and
+/// log(w / (sigma sqrt(2 pi))), so one component costs a multiply-add and two an exp and a log.
+struct MixtureLogTerms {
+  uint8_t count = 0;
+  std::array<float, kMaxMixtureComponents> mean{};
+  std::array<float, kMaxMixtureComponents> inv_sigma{};
+  std::array<float, kMaxMixtureComponents> log_norm{};
+
+  MixtureLogTerms() = default;
+  explicit MixtureLogTerms(const GaussianMixture1D& g);
+  /// Same value as GaussianMixture1D::logLikelihood (to float precision); -inf when empty.
+  double logLikelihood(double z_m) const;
 };
 
 }  // namespace gmm_localization

@@ -1,0 +1,95 @@
+#include "gmm_localization/core/exact_scorer.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace gmm_localization {
+
+Eigen::Isometry3d toIsometry(const Pose6& p) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = (Eigen::AngleAxisd(p.yaw, Eigen::Vector3d::UnitZ()) *
+                Eigen::AngleAxisd(p.pitch, Eigen::Vector3d::UnitY()) *
+                Eigen::AngleAxisd(p.roll, Eigen::Vector3d::UnitX()))
+                   .toRotationMatrix();
+  T.translation() = Eigen::Vector3d(p.x, p.y, p.z);
+  return T;
+}
+
+Pose6 fromIsometry(const Eigen::Isometry3d& T) {
+  const Eigen::Matrix3d R = T.linear();
+  Pose6 p;
+  p.x = T.translation().x();
+  p.y = T.translation().y();
+  p.z = T.translation().z();
+  // Z-Y-X Euler angles; pitch clamped away from the singularity (vehicles never get there).
+  p.pitch = std::asin(std::clamp(-R(2, 0), -1.0, 1.0));
+  p.roll = std::atan2(R(2, 1), R(2, 2));
+  p.yaw = std::atan2(R(1, 0), R(0, 0));
+  return p;
+}
+
+namespace {
+RasterWindow windowAround(const ChunkMap& map, double x, double y, double r) {
+  const CellIndex lo = map.geometry().cellAt(x - r, y - r);
+  const CellIndex hi = map.geometry().cellAt(x + r, y + r);
+  return RasterWindow(map, lo.x, lo.y, hi.x, hi.y);
+}
+}  // namespace
+
+ExactScorer::ExactScorer(const ChunkMap& map, double ll_floor, double center_x_m, double center_y_m,
+                         double radius_m, double kernel_sigma_m)
+    : map_(map), floor_(ll_floor), window_(windowAround(map, center_x_m, center_y_m, radius_m)) {
+  // Kernel width in cell units; at most a cell so the 3 x 3 neighbourhood holds the kernel.
+  const double s = std::clamp(kernel_sigma_m / map.geometry().resolution_m, 0.05, 1.0);
+  inv_two_s2_ = 1.0 / (2.0 * s * s);
+}
+
+double ExactScorer::floored(const CellIndex& c, double z) const {
+  const MapChunk* chunk = window_.chunk(c.x, c.y);
+  if (chunk == nullptr || !chunk->hasMixtures()) return floor_;
+  const int mask = chunk->cells() - 1;
+  const MixtureLogTerms& g =
+      chunk->logTerms(static_cast<int>(c.x & mask), static_cast<int>(c.y & mask));
+  if (g.count == 0) return floor_;
+  return std::max(floor_, g.logLikelihood(z));
+}
+
+double ExactScorer::cellLogLikelihood(const Eigen::Vector3d& p) const {
+  return floored(map_.geometry().cellAt(p.x(), p.y()), p.z());
+}
+
+double ExactScorer::pointLogLikelihood(const Eigen::Vector3d& p) const {
+  // Gaussian-weighted mean of the floored log-likelihoods of the 3 x 3 cells around the point,
+  // weights exp(-d^2 / (2 s^2)) of the distance d from the point to each cell centre: smooth in
+  // x, y, and unbiased for structure between cell centres (a bilinear interpolation peaks at
+  // cell centres and pulls walls onto them).
+  const MapGeometry& g = map_.geometry();
+  const CellIndex c0 = g.cellAt(p.x(), p.y());
+  const Eigen::Vector2d centre = g.cellCenter(c0);
+  const double fx = (p.x() - centre.x()) / g.resolution_m;  // in [-0.5, 0.5)
+  const double fy = (p.y() - centre.y()) / g.resolution_m;
+  double wx[3], wy[3];
+  for (int k = 0; k < 3; ++k) {
+    const double dx = fx - (k - 1), dy = fy - (k - 1);
+    wx[k] = std::exp(-dx * dx * inv_two_s2_);
+    wy[k] = std::exp(-dy * dy * inv_two_s2_);
+  }
+  double acc = 0.0, wsum = 0.0;
+  for (int ky = 0; ky < 3; ++ky) {
+    for (int kx = 0; kx < 3; ++kx) {
+      const double w = wx[kx] * wy[ky];
+      acc += w * floored({c0.x + kx - 1, c0.y + ky - 1}, p.z());
+      wsum += w;
+    }
+  }
+  return acc / wsum;
+}
+
+double ExactScorer::score(const PointList& base_points, const Pose6& pose) const {
+  const Eigen::Isometry3d T = toIsometry(pose);
+  double sum = 0.0;
+  for (const Eigen::Vector3f& q : base_points) sum += pointLogLikelihood(T * q.cast<double>());
+  return sum;
+}
+
+}  // namespace gmm_localization

@@ -1,0 +1,192 @@
+#include "gmm_localization/core/search_problem.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Geometry>
+
+namespace gmm_localization {
+
+SearchWindow SearchWindow::fromExtent(const Pose6& prior, double half_extent_x_m,
+                                      double half_extent_y_m, double half_heading_rad,
+                                      double heading_step_rad, double resolution_m) {
+  SearchWindow w;
+  w.prior = prior;
+  w.half_x = static_cast<int>(std::ceil(half_extent_x_m / resolution_m - 1e-9));
+  w.half_y = static_cast<int>(std::ceil(half_extent_y_m / resolution_m - 1e-9));
+  w.heading_step_rad = heading_step_rad;
+  w.half_h = heading_step_rad > 0.0
+                 ? static_cast<int>(std::ceil(half_heading_rad / heading_step_rad - 1e-9))
+                 : 0;
+  return w;
+}
+
+std::string SearchWindow::validate() const {
+  const Pose6& p = prior;
+  if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) && std::isfinite(p.roll) &&
+        std::isfinite(p.pitch) && std::isfinite(p.yaw))) {
+    return "prior pose is not finite";
+  }
+  if (half_x < 0 || half_y < 0 || half_h < 0 || half_x > 4096 || half_y > 4096 || half_h > 2048) {
+    return "window half sizes (" + std::to_string(half_x) + ", " + std::to_string(half_y) +
+           " cells, " + std::to_string(half_h) + " headings) must be in [0, 4096] / [0, 2048]";
+  }
+  if (half_h > 0 && !(heading_step_rad > 0.0 && heading_step_rad < 1.0)) {
+    return "heading_step_rad=" + std::to_string(heading_step_rad) + " must be in (0, 1)";
+  }
+  return {};
+}
+
+RasterWindow::RasterWindow(const ChunkMap& map, int64_t gx_min, int64_t gy_min, int64_t gx_max,
+                           int64_t gy_max) {
+  shift_ = map.options().chunk_shift;
+  mask_ = (int64_t{1} << shift_) - 1;
+  cx0_ = gx_min >> shift_;
+  cy0_ = gy_min >> shift_;
+  w_ = (gx_max >> shift_) - cx0_ + 1;
+  h_ = (gy_max >> shift_) - cy0_ + 1;
+  grid_.assign(static_cast<size_t>(w_ * h_), nullptr);
+  for (int64_t cy = 0; cy < h_; ++cy) {
+    for (int64_t cx = 0; cx < w_; ++cx) {
+      MapChunkConstPtr c =
+          map.find({static_cast<int32_t>(cx + cx0_), static_cast<int32_t>(cy + cy0_)});
+      grid_[static_cast<size_t>(cy * w_ + cx)] = c.get();  // the ChunkMap keeps it alive
+    }
+  }
+}
+
+size_t RasterWindow::chunksPresent() const {
+  return static_cast<size_t>(
+      std::count_if(grid_.begin(), grid_.end(), [](const MapChunk* c) { return c != nullptr; }));
+}
+
+Result<SearchProblem> SearchProblem::create(const ChunkMap& map, const PointList& points,
+                                            const SearchWindow& window) {
+  const std::string invalid = window.validate();
+  if (!invalid.empty()) return Result<SearchProblem>::failure("search window: " + invalid);
+  if (points.empty()) return Result<SearchProblem>::failure("no points left to match");
+
+  const MapGeometry& g = map.geometry();
+  const RasterOptions& ro = map.options();
+  std::vector<std::vector<CellPoint>> rotated(window.sizeH());
+  int64_t gx_min = std::numeric_limits<int64_t>::max(), gy_min = gx_min;
+  int64_t gx_max = std::numeric_limits<int64_t>::min(), gy_max = gx_max;
+  const Pose6& prior = window.prior;
+  for (int j = 0; j < window.sizeH(); ++j) {
+    const double yaw = prior.yaw + (j - window.half_h) * window.heading_step_rad;
+    const double c = std::cos(yaw), s = std::sin(yaw);
+    std::vector<CellPoint>& out = rotated[j];
+    out.reserve(points.size());
+    for (const Eigen::Vector3f& q : points) {
+      const double x = prior.x + c * q.x() - s * q.y();
+      const double y = prior.y + s * q.x() + c * q.y();
+      const double z = prior.z + q.z();
+      const CellIndex cell = g.cellAt(x, y);
+      out.push_back({static_cast<int32_t>(cell.x - window.half_x),
+                     static_cast<int32_t>(cell.y - window.half_y), map.zBin(z), 1u});
+    }
+    // Sort by (z bin, row, column) for locality in the z-slab-major tables, then merge
+    // points that share a cell and bin.
+    std::sort(out.begin(), out.end(), [](const CellPoint& a, const CellPoint& b) {
+      if (a.zb != b.zb) return a.zb < b.zb;
+      if (a.gy != b.gy) return a.gy < b.gy;
+      return a.gx < b.gx;
+    });
+    size_t w = 0;
+    for (size_t i = 0; i < out.size(); ++i) {
+      if (w > 0 && out[w - 1].zb == out[i].zb && out[w - 1].gy == out[i].gy &&
+          out[w - 1].gx == out[i].gx) {
+        out[w - 1].count += out[i].count;
+      } else {
+        out[w++] = out[i];
+      }
+    }
+    out.resize(w);
+    for (const CellPoint& p : out) {
+      gx_min = std::min<int64_t>(gx_min, p.gx);
+      gx_max = std::max<int64_t>(gx_max, p.gx);
+      gy_min = std::min<int64_t>(gy_min, p.gy);
+      gy_max = std::max<int64_t>(gy_max, p.gy);
+    }
+  }
+
+  int top = 0;
+  while (top < ro.num_layers && 2 * (1 << top) < std::max(window.sizeX(), window.sizeY())) {
+    ++top;
+  }
+  // Node blocks of layer `top` starting inside the window reach 2^top - 1 cells beyond it.
+  const int64_t reach = (int64_t{1} << top) - 1;
+  RasterWindow raster(map, gx_min, gy_min, gx_max + window.sizeX() - 1 + reach,
+                      gy_max + window.sizeY() - 1 + reach);
+  if (raster.chunksPresent() == 0) {
+    return Result<SearchProblem>::failure(
+        "off the map: no rasterized map chunk under the scan anywhere in the search window");
+  }
+  SearchProblem problem(map, window, std::move(raster));
+  problem.rotated_ = std::move(rotated);
+  problem.scan_points_ = static_cast<int64_t>(points.size());
+  problem.top_layer_ = top;
+  return problem;
+}
+
+int64_t SearchProblem::score(int heading_index, int layer, int tx, int ty) const {
+  int64_t sum = 0;
+  const int shift = raster_.shift();
+  const int64_t mask = (int64_t{1} << shift) - 1;
+  for (const CellPoint& p : rotated_[heading_index]) {
+    const int64_t gx = static_cast<int64_t>(p.gx) + tx;
+    const int64_t gy = static_cast<int64_t>(p.gy) + ty;
+    const MapChunk* c = raster_.chunk(gx, gy);
+    if (c == nullptr) continue;
+    sum += static_cast<int64_t>(p.count) *
+           c->value(layer, p.zb, static_cast<int>(gx & mask), static_cast<int>(gy & mask));
+  }
+  return sum;
+}
+
+void SearchProblem::scoreBlock(int heading_index, int tx0, int ty0, int nx, int ny,
+                               std::vector<int64_t>& out) const {
+  std::vector<int32_t> acc(static_cast<size_t>(nx) * ny, 0);
+  const int shift = raster_.shift();
+  const int64_t mask = (int64_t{1} << shift) - 1;
+  for (const CellPoint& p : rotated_[heading_index]) {
+    const int32_t count = static_cast<int32_t>(p.count);
+    for (int r = 0; r < ny; ++r) {
+      const int64_t gy = static_cast<int64_t>(p.gy) + ty0 + r;
+      int32_t* row = acc.data() + static_cast<size_t>(r) * nx;
+      int64_t gx = static_cast<int64_t>(p.gx) + tx0;
+      int i = 0;
+      while (i < nx) {
+        // One segment: the part of the row inside one chunk.
+        const int seg = static_cast<int>(std::min<int64_t>(nx - i, mask + 1 - (gx & mask)));
+        const MapChunk* c = raster_.chunk(gx, gy);
+        if (c != nullptr) {
+          const RasterLayer& L = c->layer(0);
+          const int32_t zi = p.zb - L.z_lo;
+          if (zi >= 0 && zi < L.nz) {
+            const uint8_t* src = L.data + (static_cast<size_t>(zi) << (2 * shift)) +
+                                 (static_cast<size_t>(gy & mask) << shift) +
+                                 static_cast<size_t>(gx & mask);
+            int32_t* dst = row + i;
+            for (int k = 0; k < seg; ++k) dst[k] += count * src[k];
+          }
+        }
+        i += seg;
+        gx += seg;
+      }
+    }
+  }
+  out.assign(acc.begin(), acc.end());
+}
+
+Pose6 SearchProblem::pose(int heading_index, int tx, int ty) const {
+  Pose6 p = window_.prior;
+  const double res = map_->geometry().resolution_m;
+  p.x += (tx - window_.half_x) * res;
+  p.y += (ty - window_.half_y) * res;
+  p.yaw += (heading_index - window_.half_h) * window_.heading_step_rad;
+  return p;
+}
+
+}  // namespace gmm_localization
