@@ -11,10 +11,15 @@ add_dependencies(gmm_ros ${PROJECT_NAME}_generate_messages_cpp)
 set_target_properties(gmm_ros PROPERTIES
   LIBRARY_OUTPUT_DIRECTORY ${CATKIN_DEVEL_PREFIX}/${CATKIN_PACKAGE_LIB_DESTINATION})
 
-file(GLOB GMM_NODELET_SOURCES CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/src/nodelets/*.cpp)
-add_library(gmm_localization_nodelets SHARED ${GMM_NODELET_SOURCES})
-target_link_libraries(gmm_localization_nodelets PUBLIC gmm_ros)
-set_target_properties(gmm_localization_nodelets PROPERTIES
-  LIBRARY_OUTPUT_DIRECTORY ${CATKIN_DEVEL_PREFIX}/${CATKIN_PACKAGE_LIB_DESTINATION})
-
-install(TARGETS gmm_ros gmm_localization_nodelets LIBRARY DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION})
+# One library per nodelet (src/nodelets/<name>_nodelet.cpp -> libgmm_<name>_nodelet), each
+# listed in nodelet_plugins.xml: a nodelet's entry point is a few lines building its class.
+file(GLOB GMM_NODELET_SOURCES CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/src/nodelets/*_nodelet.cpp)
+install(TARGETS gmm_ros LIBRARY DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION})
+foreach(source ${GMM_NODELET_SOURCES})
+  get_filename_component(name ${source} NAME_WE)
+  add_library(gmm_${name} SHARED ${source})
+  target_link_libraries(gmm_${name} PUBLIC gmm_ros)
+  set_target_properties(gmm_${name} PROPERTIES
+    LIBRARY_OUTPUT_DIRECTORY ${CATKIN_DEVEL_PREFIX}/${CATKIN_PACKAGE_LIB_DESTINATION})
+  install(TARGETS gmm_${name} LIBRARY DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION})
+endforeach()

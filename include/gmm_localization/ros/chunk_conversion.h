@@ -1,0 +1,25 @@
+#pragma once
+// Core MapChunk <-> gmm_localization/RasterChunk message. fromMsg shares the message's memory
+// (no copy): the returned chunk keeps the message alive, which is what makes ConstPtr
+// publishing inside one nodelet manager zero-copy.
+
+#include <string>
+
+#include <ros/time.h>
+
+#include "gmm_localization/RasterChunk.h"
+#include "gmm_localization/core/map_chunk.h"
+#include "gmm_localization/core/result.h"
+
+namespace gmm_localization {
+namespace node {
+
+/// Fills msg from chunk (one copy of the tables).
+void toMsg(const MapChunk& chunk, uint64_t map_version, const std::string& frame_id,
+           const ros::Time& stamp, RasterChunk& msg);
+
+/// Wraps a received chunk message. Fails, naming the problem, when its sizes are inconsistent.
+Result<MapChunkConstPtr> fromMsg(const RasterChunk::ConstPtr& msg);
+
+}  // namespace node
+}  // namespace gmm_localization
