@@ -80,14 +80,17 @@ SearchOutcome branchAndBoundSearch(const SearchProblem& problem,
   stats.top_layer = top;
   stats.evaluations_per_layer.assign(top + 1, 0);
 
-  auto evaluate = [&](int j, int layer, int tx, int ty) {
-    const int64_t s = problem.score(j, layer, tx, ty);
+  auto record = [&](int j, int layer, int tx, int ty, int64_t s) {
     ++stats.evaluations;
     ++stats.evaluations_per_layer[layer];
     if (traversal != nullptr) {
       traversal->push_back({static_cast<int16_t>(layer), static_cast<int16_t>(j),
                             static_cast<int16_t>(tx), static_cast<int16_t>(ty), s});
     }
+  };
+  auto evaluate = [&](int j, int layer, int tx, int ty) {
+    const int64_t s = problem.score(j, layer, tx, ty);
+    record(j, layer, tx, ty, s);
     return s;
   };
 
@@ -117,15 +120,19 @@ SearchOutcome branchAndBoundSearch(const SearchProblem& problem,
     if (n.layer == 0) {
       return makeOutcome(problem, n.heading_index, n.tx, n.ty, n.bound, std::move(stats));
     }
+    // Branch into the (up to) four children at the next finer layer, scored in one pass.
     const int child = n.layer - 1;
     const int h = 1 << child;
+    int64_t scores[4];
+    problem.scoreQuad(n.heading_index, child, n.tx, n.ty, h, scores);
     for (int dy = 0; dy < 2; ++dy) {
       const int ty = n.ty + dy * h;
       if (ty >= w.sizeY()) break;
       for (int dx = 0; dx < 2; ++dx) {
         const int tx = n.tx + dx * h;
         if (tx >= w.sizeX()) break;
-        push({evaluate(n.heading_index, child, tx, ty), n.heading_index, ty, tx, child});
+        record(n.heading_index, child, tx, ty, scores[dy * 2 + dx]);
+        push({scores[dy * 2 + dx], n.heading_index, ty, tx, child});
       }
     }
   }

@@ -58,6 +58,7 @@ struct WorkLayer {
 /// {0, h} x {0, h}, then over pairs of z bins when coarsening. Valid for cells whose block
 /// stays inside the extended area, which includes the chunk itself.
 WorkLayer nextLayer(const WorkLayer& prev, int extent, int h, bool coarsen_z) {
+  // coarsen_z: this layer halves the z resolution of the previous one.
   const size_t plane = static_cast<size_t>(extent) * extent;
   const int valid = extent - h;  // cells whose +h neighbour exists
   std::vector<uint8_t> xy(prev.v.size(), 0);
@@ -185,7 +186,7 @@ Result<MapChunkConstPtr> rasterizeChunk(const GmmMap& map, ChunkId id,
   };
   crop(work, 0);
   for (int k = 1; k <= options.num_layers; ++k) {
-    work = nextLayer(work, extent, 1 << (k - 1), options.coarsen_z);
+    work = nextLayer(work, extent, 1 << (k - 1), options.zShift(k) > options.zShift(k - 1));
     crop(work, options.zShift(k));
   }
   std::vector<RasterLayer> layers;

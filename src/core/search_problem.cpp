@@ -145,6 +145,44 @@ int64_t SearchProblem::score(int heading_index, int layer, int tx, int ty) const
   return sum;
 }
 
+void SearchProblem::scoreQuad(int heading_index, int layer, int tx, int ty, int h,
+                              int64_t out[4]) const {
+  int64_t s00 = 0, s10 = 0, s01 = 0, s11 = 0;
+  const int shift = raster_.shift();
+  const int64_t mask = (int64_t{1} << shift) - 1;
+  const size_t row = size_t{1} << shift;
+  for (const CellPoint& p : rotated_[heading_index]) {
+    const int64_t gx = static_cast<int64_t>(p.gx) + tx;
+    const int64_t gy = static_cast<int64_t>(p.gy) + ty;
+    const int64_t lx = gx & mask, ly = gy & mask;
+    const int64_t count = p.count;
+    if (lx + h <= mask && ly + h <= mask) {
+      // All four lookups fall in one chunk and one z slab: one address computation.
+      const MapChunk* c = raster_.chunk(gx, gy);
+      if (c == nullptr) continue;
+      const RasterLayer& L = c->layer(layer);
+      const int32_t zi = (p.zb >> L.z_shift) - L.z_lo;
+      if (zi < 0 || zi >= L.nz) continue;
+      const uint8_t* base = L.data + (static_cast<size_t>(zi) << (2 * shift)) +
+                            (static_cast<size_t>(ly) << shift) + static_cast<size_t>(lx);
+      const size_t dy = static_cast<size_t>(h) * row;
+      s00 += count * base[0];
+      s10 += count * base[h];
+      s01 += count * base[dy];
+      s11 += count * base[dy + h];
+    } else {
+      s00 += count * raster_.value(layer, gx, gy, p.zb);
+      s10 += count * raster_.value(layer, gx + h, gy, p.zb);
+      s01 += count * raster_.value(layer, gx, gy + h, p.zb);
+      s11 += count * raster_.value(layer, gx + h, gy + h, p.zb);
+    }
+  }
+  out[0] = s00;
+  out[1] = s10;
+  out[2] = s01;
+  out[3] = s11;
+}
+
 void SearchProblem::scoreBlock(int heading_index, int tx0, int ty0, int nx, int ny,
                                std::vector<int64_t>& out) const {
   std::vector<int32_t> acc(static_cast<size_t>(nx) * ny, 0);

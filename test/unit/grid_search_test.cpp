@@ -54,13 +54,13 @@ void expectSame(const SearchOutcome& a, const SearchOutcome& b, int c) {
 
 TEST(GridSearch, BranchAndBoundEqualsExhaustiveOnRandomCases) {
   const GmmMap map = testing::randomMap(5, geometry(), -2, -2, 4, 4, 0.35);
-  for (bool coarsen : {true, false}) {
+  for (int coarsen : {0, 1, 2}) {
     RasterOptions o;
     o.chunk_shift = 5;
     o.num_layers = 4;
-    o.coarsen_z = coarsen;
+    o.z_coarsening_period = coarsen;
     const ChunkMap chunks = rasterize(map, o);
-    std::mt19937 rng(coarsen ? 100 : 200);
+    std::mt19937 rng(100 + coarsen);
     std::uniform_real_distribution<double> u(0.0, 1.0);
     for (int c = 0; c < 60; ++c) {
       Pose6 prior;

@@ -14,12 +14,12 @@
 namespace gmm_localization {
 namespace {
 
-RasterOptions smallOptions(bool coarsen_z) {
+RasterOptions smallOptions(int z_coarsening_period) {
   RasterOptions o;
   o.chunk_shift = 4;  // 16-cell chunks: many chunk borders in a small map
   o.num_layers = 3;
   o.z_step_m = 0.1;
-  o.coarsen_z = coarsen_z;
+  o.z_coarsening_period = z_coarsening_period;
   return o;
 }
 
@@ -46,7 +46,7 @@ ChunkMap rasterizeAll(const GmmMap& map, const RasterOptions& o, int c0, int c1)
 
 TEST(Rasterizer, BaseLayerIsQuantizedMaxOverBin) {
   const GmmMap map = testing::randomMap(11, smallGeometry(), -1, -1, 2, 2);
-  const RasterOptions o = smallOptions(true);
+  const RasterOptions o = smallOptions(1);
   const ChunkMap chunks = rasterizeAll(map, o, -2, 1);
   const ScoreQuantizer q(o);
   std::mt19937 rng(3);
@@ -64,9 +64,9 @@ TEST(Rasterizer, BaseLayerIsQuantizedMaxOverBin) {
   }
 }
 
-void checkAdmissible(bool coarsen_z, uint32_t seed) {
+void checkAdmissible(int period, uint32_t seed) {
   const GmmMap map = testing::randomMap(seed, smallGeometry(), -1, -1, 2, 2, 0.4);
-  const RasterOptions o = smallOptions(coarsen_z);
+  const RasterOptions o = smallOptions(period);
   // Chunks -3..1 cover every cell of the map (tiles -1..0 span cells -24..23) and beyond.
   const ChunkMap chunks = rasterizeAll(map, o, -3, 1);
   std::mt19937 rng(seed + 1);
@@ -98,8 +98,11 @@ void checkAdmissible(bool coarsen_z, uint32_t seed) {
   EXPECT_GT(nonzero, 1000);  // the check exercised real values, not only the floor
 }
 
-TEST(Rasterizer, LayersAreAdmissibleAndTight) { checkAdmissible(false, 21); }
-TEST(Rasterizer, LayersWithCoarsenedZAreAdmissibleAndTight) { checkAdmissible(true, 22); }
+TEST(Rasterizer, LayersAreAdmissibleAndTight) { checkAdmissible(0, 21); }
+TEST(Rasterizer, LayersWithCoarsenedZAreAdmissibleAndTight) {
+  checkAdmissible(1, 22);
+  checkAdmissible(2, 23);
+}
 
 TEST(Rasterizer, AboveFloorRangeContainsEveryValueAboveFloor) {
   GaussianMixture1D g;
@@ -125,7 +128,7 @@ TEST(Rasterizer, RejectsInvalidOptions) {
 
 TEST(Rasterizer, EmptyMapGivesFloorEverywhere) {
   GmmMap map(smallGeometry());
-  auto r = rasterizeChunk(map, {0, 0}, smallOptions(true));
+  auto r = rasterizeChunk(map, {0, 0}, smallOptions(1));
   ASSERT_TRUE(r.ok());
   for (int k = 0; k <= 3; ++k) EXPECT_EQ(r.value()->value(k, 5, 3, 3), 0);
 }

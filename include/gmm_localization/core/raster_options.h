@@ -23,9 +23,11 @@ struct RasterOptions {
   /// Number of coarse layers above the base: layer k in 1..num_layers is the max over the
   /// 2^k x 2^k block of base cells starting at each cell (paper Fig. 4/5).
   int num_layers = 6;
-  /// When true, layer k also takes the max over aligned groups of 2^k z bins, so coarse layers
-  /// cost geometrically less memory (total about 2x the base layer); still an upper bound.
-  bool coarsen_z = true;
+  /// Layer k also takes the max over aligned groups of 2^(k / z_coarsening_period) z bins
+  /// (integer division), so coarse layers cost less memory; still an upper bound. 0: no z
+  /// coarsening (tightest bounds, (num_layers + 1) x the base layer's memory); 1: halve the z
+  /// resolution every layer (about 2x the base layer); 2: every other layer (about 3.6x).
+  int z_coarsening_period = 2;
   /// Raster chunks are 2^chunk_shift cells square (independent of the map's file tiles).
   int chunk_shift = 7;
 
@@ -41,6 +43,9 @@ struct RasterOptions {
     if (num_layers < 0 || num_layers > 10) {
       return "num_layers=" + std::to_string(num_layers) + " must be in [0, 10]";
     }
+    if (z_coarsening_period < 0 || z_coarsening_period > 10) {
+      return "z_coarsening_period=" + std::to_string(z_coarsening_period) + " must be in [0, 10]";
+    }
     if (chunk_shift < 4 || chunk_shift > 10) {
       return "chunk_shift=" + std::to_string(chunk_shift) + " must be in [4, 10]";
     }
@@ -53,7 +58,7 @@ struct RasterOptions {
 
   int chunkCells() const { return 1 << chunk_shift; }
   /// log2 of the z-bin grouping of layer k.
-  int zShift(int layer) const { return coarsen_z ? layer : 0; }
+  int zShift(int layer) const { return z_coarsening_period > 0 ? layer / z_coarsening_period : 0; }
 };
 
 /// Maps a log-likelihood to an 8-bit score, rounding UP so that a quantized value is never

@@ -102,6 +102,10 @@ class SearchProblem {
 
   /// Score (sum of layer values over points) of node (j, layer, tx, ty).
   int64_t score(int heading_index, int layer, int tx, int ty) const;
+  /// Scores of the four nodes (j, layer, tx + a h, ty + b h), a, b in {0, 1}, in one pass over
+  /// the points (the children of a branch-and-bound node): out[b * 2 + a]. Children outside
+  /// the window are still scored (the caller skips them).
+  void scoreQuad(int heading_index, int layer, int tx, int ty, int h, int64_t out[4]) const;
   /// Base-layer scores of translations tx in [tx0, tx0 + nx), ty in [ty0, ty0 + ny) at heading j,
   /// row-major in ty, into out (resized). Row-contiguous table reads (z-slab-major layout).
   void scoreBlock(int heading_index, int tx0, int ty0, int nx, int ny,
