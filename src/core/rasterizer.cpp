@@ -1,6 +1,7 @@
 #include "gmm_localization/core/rasterizer.h"
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <limits>
 
@@ -94,6 +95,37 @@ WorkLayer nextLayer(const WorkLayer& prev, int extent, int h, bool coarsen_z) {
   return next;
 }
 
+/// log p(z) of a mixture with its per-component constants precomputed in double precision, so
+/// the base layer equals q(GaussianMixture1D::maxLogLikelihood) exactly.
+class PreparedMixture {
+ public:
+  explicit PreparedMixture(const GaussianMixture1D& g) : n_(g.size()) {
+    for (int j = 0; j < n_; ++j) {
+      const GaussianComponent& c = g.component(j);
+      mean_[j] = c.mean_m;
+      sigma_[j] = c.sigma_m;
+      norm_[j] = std::log(static_cast<double>(c.weight)) - std::log(sigma_[j]) - kHalfLog2Pi;
+    }
+  }
+  double logLikelihood(double z) const {
+    double t[kMaxMixtureComponents];
+    double peak = -std::numeric_limits<double>::infinity();
+    for (int j = 0; j < n_; ++j) {
+      const double d = (z - mean_[j]) / sigma_[j];
+      t[j] = norm_[j] - 0.5 * d * d;
+      peak = std::max(peak, t[j]);
+    }
+    if (n_ <= 1 || !std::isfinite(peak)) return peak;
+    double sum = 0.0;
+    for (int j = 0; j < n_; ++j) sum += std::exp(t[j] - peak);
+    return peak + std::log(sum);
+  }
+
+ private:
+  int n_;
+  double mean_[kMaxMixtureComponents], sigma_[kMaxMixtureComponents], norm_[kMaxMixtureComponents];
+};
+
 }  // namespace
 
 std::vector<double> mixtureModes(const GaussianMixture1D& g) { return g.modes(); }
@@ -127,14 +159,15 @@ void rasterizeCell(const GaussianMixture1D& g, int32_t zb_lo, int32_t nz, double
       std::min(zb_lo + nz - 1, floorBin(std::min(range.second, kMaxAbsHeightM), z_step_m));
   if (b0 > b1) return;
   const std::vector<double> modes = g.modes();
-  double ll_lo = g.logLikelihood(b0 * z_step_m);
+  const PreparedMixture terms(g);  // the same function without a log per call
+  double ll_lo = terms.logLikelihood(b0 * z_step_m);
   for (int32_t b = b0; b <= b1; ++b) {
     const double z_lo = b * z_step_m;
     const double z_hi = (b + 1) * z_step_m;
-    const double ll_hi = g.logLikelihood(z_hi);
+    const double ll_hi = terms.logLikelihood(z_hi);
     double best = std::max(ll_lo, ll_hi);
     for (double m : modes) {
-      if (m > z_lo && m < z_hi) best = std::max(best, g.logLikelihood(m));
+      if (m > z_lo && m < z_hi) best = std::max(best, terms.logLikelihood(m));
     }
     out[static_cast<size_t>(b - zb_lo) * stride] = quantizer.quantize(best);
     ll_lo = ll_hi;
@@ -166,32 +199,69 @@ Result<MapChunkConstPtr> rasterizeChunk(const GmmMap& map, ChunkId id,
     }
   }
 
-  // Crop each layer to the chunk and append it to one buffer.
-  auto storage = std::make_shared<std::vector<uint8_t>>();
-  std::vector<std::pair<RasterLayer, size_t>> placed;  // layer, offset into storage
-  auto crop = [&](const WorkLayer& w, int z_shift) {
-    RasterLayer L;
-    L.z_lo = w.z_lo;
-    L.nz = w.nz;
-    L.z_shift = z_shift;
-    const size_t offset = storage->size();
-    storage->resize(offset + static_cast<size_t>(w.nz) * out_plane);
+  // Crop each layer to the chunk and compress it into per-cell z spans.
+  struct Storage {
+    std::vector<uint32_t> spans;
+    std::vector<uint8_t> values;
+  };
+  auto storage = std::make_shared<Storage>();
+  struct Placed {
+    int32_t z_shift;
+    size_t spans_start, values_start, value_count;
+  };
+  std::vector<Placed> placed;
+  std::vector<int32_t> lo(out_plane), hi(out_plane);
+  auto compress = [&](const WorkLayer& w, int z_shift) {
+    std::fill(lo.begin(), lo.end(), INT32_MAX);
+    std::fill(hi.begin(), hi.end(), -1);
     for (int32_t z = 0; z < w.nz; ++z) {
       for (int y = 0; y < cells; ++y) {
-        const uint8_t* src = w.v.data() + z * plane + static_cast<size_t>(y) * extent;
-        std::copy(src, src + cells, storage->data() + offset + z * out_plane + y * cells);
+        const uint8_t* row = w.v.data() + z * plane + static_cast<size_t>(y) * extent;
+        for (int x = 0; x < cells; ++x) {
+          if (row[x] != 0) {
+            const size_t i = static_cast<size_t>(y) * cells + x;
+            lo[i] = std::min(lo[i], z);
+            hi[i] = z;
+          }
+        }
       }
     }
-    placed.emplace_back(L, offset);
+    Placed p{z_shift, storage->spans.size(), storage->values.size(), 0};
+    uint32_t offset = 0;
+    for (size_t i = 0; i < out_plane; ++i) {
+      storage->spans.push_back(offset);
+      storage->spans.push_back(static_cast<uint32_t>(hi[i] >= 0 ? w.z_lo + lo[i] : 0));
+      if (hi[i] >= 0) offset += static_cast<uint32_t>(hi[i] - lo[i] + 1);
+    }
+    storage->spans.push_back(offset);  // closes the last cell
+    storage->spans.push_back(0);
+    p.value_count = offset;
+    storage->values.resize(p.values_start + offset, 0);
+    uint8_t* values = storage->values.data() + p.values_start;
+    const uint32_t* spans = storage->spans.data() + p.spans_start;
+    for (int32_t z = 0; z < w.nz; ++z) {
+      for (int y = 0; y < cells; ++y) {
+        const uint8_t* row = w.v.data() + z * plane + static_cast<size_t>(y) * extent;
+        for (int x = 0; x < cells; ++x) {
+          const size_t i = static_cast<size_t>(y) * cells + x;
+          if (z >= lo[i] && z <= hi[i]) values[spans[2 * i] + (z - lo[i])] = row[x];
+        }
+      }
+    }
+    placed.push_back(p);
   };
-  crop(work, 0);
+  compress(work, 0);
   for (int k = 1; k <= options.num_layers; ++k) {
     work = nextLayer(work, extent, 1 << (k - 1), options.zShift(k) > options.zShift(k - 1));
-    crop(work, options.zShift(k));
+    compress(work, options.zShift(k));
   }
   std::vector<RasterLayer> layers;
-  for (auto& [L, offset] : placed) {
-    L.data = storage->data() + offset;
+  for (const Placed& p : placed) {
+    RasterLayer L;
+    L.z_shift = p.z_shift;
+    L.spans = storage->spans.data() + p.spans_start;
+    L.values = storage->values.data() + p.values_start;
+    L.value_count = static_cast<uint32_t>(p.value_count);
     layers.push_back(L);
   }
   chunk->setLayers(std::move(layers), storage);

@@ -72,45 +72,67 @@ double wrapAngle(double a) { return std::atan2(std::sin(a), std::cos(a)); }
 
 }  // namespace
 
-Result<MatchResult> Registration::match(const ChunkMap& map, const PointList& base_points,
-                                        const MatchRequest& request,
-                                        std::vector<TraversalNode>* traversal,
-                                        const std::function<double()>& now,
-                                        RegistrationTiming* timing) const {
-  using R = Result<MatchResult>;
+Result<PreparedSearch> Registration::prepare(const ChunkMap& map, const PointList& base_points,
+                                             const MatchRequest& request) const {
+  using R = Result<PreparedSearch>;
   const std::string invalid = options_.validate();
   if (!invalid.empty()) return R::failure("registration options: " + invalid);
   if (!finitePose(request.prior)) return R::failure("prior pose is not finite");
-  auto tick = [&]() { return now ? now() : 0.0; };
-  double t0 = tick();
-
-  MatchResult out;
-  out.filtered = filterScan(base_points, request.prior.roll, request.prior.pitch, options_.filter);
-  const FilteredScan& f = out.filtered;
+  FilteredScan f =
+      filterScan(base_points, request.prior.roll, request.prior.pitch, options_.filter);
   if (f.points.empty()) {
     return R::failure("no points left after filtering: " + std::to_string(f.input_points) +
                       " input, " + std::to_string(f.dropped_nonfinite) + " non-finite, " +
                       std::to_string(f.dropped_range) + " out of range, " +
                       std::to_string(f.dropped_height) + " out of the height band");
   }
-  double t1 = tick();
-  if (timing) timing->filter_s = t1 - t0;
-
-  // Height pre-alignment, then Algorithm 2 or 3 over x, y, heading.
+  // Height pre-alignment, then the window over x, y, heading around the (raised) prior.
   Pose6 prior = request.prior;
-  out.z_offset_m = bestHeightOffset(map, f.points, prior, options_.z_search_m);
-  prior.z += out.z_offset_m;
+  const double z_offset = bestHeightOffset(map, f.points, prior, options_.z_search_m);
+  prior.z += z_offset;
   const SearchWindow window =
       SearchWindow::fromExtent(prior, request.half_x_m, request.half_y_m, request.half_heading_rad,
                                options_.heading_step_rad, map.geometry().resolution_m);
   auto problem = SearchProblem::create(map, f.points, window);
   if (!problem.ok()) return R::failure(problem.error());
-  out.search = options_.exhaustive
-                   ? exhaustiveSearch(problem.value())
-                   : branchAndBoundSearch(problem.value(), options_.branch_and_bound, traversal);
-  double t2 = tick();
-  if (timing) timing->search_s = t2 - t1;
+  return PreparedSearch{std::move(f), z_offset, std::move(problem.value())};
+}
 
+Result<MatchResult> Registration::match(const ChunkMap& map, const PointList& base_points,
+                                        const MatchRequest& request,
+                                        std::vector<TraversalNode>* traversal,
+                                        const std::function<double()>& now,
+                                        RegistrationTiming* timing) const {
+  auto tick = [&]() { return now ? now() : 0.0; };
+  const double t0 = tick();
+  auto prepared = prepare(map, base_points, request);
+  if (!prepared.ok()) return Result<MatchResult>::failure(prepared.error());
+  const double t1 = tick();
+  // Algorithm 2 (reference) or 3 over x, y, heading.
+  const SearchProblem& problem = prepared->problem;
+  const SearchOutcome search =
+      options_.exhaustive ? exhaustiveSearch(problem)
+                          : branchAndBoundSearch(problem, options_.branch_and_bound, traversal);
+  if (timing) {
+    timing->filter_s = t1 - t0;
+    timing->search_s = tick() - t1;
+  }
+  return finish(map, base_points, request, std::move(prepared.value()), search, now, timing);
+}
+
+Result<MatchResult> Registration::finish(const ChunkMap& map, const PointList& base_points,
+                                         const MatchRequest& request, PreparedSearch prepared,
+                                         const SearchOutcome& search,
+                                         const std::function<double()>& now,
+                                         RegistrationTiming* timing) const {
+  using R = Result<MatchResult>;
+  auto tick = [&]() { return now ? now() : 0.0; };
+  const double t2 = tick();
+  MatchResult out;
+  out.search = search;
+  out.z_offset_m = prepared.z_offset_m;
+  out.filtered = std::move(prepared.filtered);
+  const FilteredScan& f = out.filtered;
   // Constrained 6-DOF hill climb on the exact likelihood, on the unlevelled points.
   const Eigen::Matrix3f unlevel =
       (Eigen::AngleAxisd(request.prior.pitch, Eigen::Vector3d::UnitY()) *
@@ -135,7 +157,7 @@ Result<MatchResult> Registration::match(const ChunkMap& map, const PointList& ba
   double t3 = tick();
   if (timing) timing->refine_s = t3 - t2;
 
-  out.covariance_detail = searchCovariance(problem.value(), out.search, options_.covariance);
+  out.covariance_detail = searchCovariance(prepared.problem, out.search, options_.covariance);
   out.covariance_xyh = out.covariance_detail.covariance;
   double t4 = tick();
   if (timing) timing->covariance_s = t4 - t3;

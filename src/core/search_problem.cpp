@@ -1,6 +1,7 @@
 #include "gmm_localization/core/search_problem.h"
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <limits>
 
@@ -86,12 +87,13 @@ Result<SearchProblem> SearchProblem::create(const ChunkMap& map, const PointList
       out.push_back({static_cast<int32_t>(cell.x - window.half_x),
                      static_cast<int32_t>(cell.y - window.half_y), map.zBin(z), 1u});
     }
-    // Sort by (z bin, row, column) for locality in the z-slab-major tables, then merge
-    // points that share a cell and bin.
+    // Sort by (row, column, z bin): the tables store each cell's z span contiguously and the
+    // cells row by row, so this order reads them almost sequentially. Then merge points that
+    // share a cell and bin.
     std::sort(out.begin(), out.end(), [](const CellPoint& a, const CellPoint& b) {
-      if (a.zb != b.zb) return a.zb < b.zb;
       if (a.gy != b.gy) return a.gy < b.gy;
-      return a.gx < b.gx;
+      if (a.gx != b.gx) return a.gx < b.gx;
+      return a.zb < b.zb;
     });
     size_t w = 0;
     for (size_t i = 0; i < out.size(); ++i) {
@@ -150,26 +152,30 @@ void SearchProblem::scoreQuad(int heading_index, int layer, int tx, int ty, int 
   int64_t s00 = 0, s10 = 0, s01 = 0, s11 = 0;
   const int shift = raster_.shift();
   const int64_t mask = (int64_t{1} << shift) - 1;
-  const size_t row = size_t{1} << shift;
+  const size_t dy = static_cast<size_t>(h) << shift;
+  // Points come sorted by row and column, so consecutive points mostly share a chunk: keep the
+  // last chunk's layer at hand.
+  int64_t cached_cx = INT64_MIN, cached_cy = INT64_MIN;
+  const RasterLayer* L = nullptr;
   for (const CellPoint& p : rotated_[heading_index]) {
     const int64_t gx = static_cast<int64_t>(p.gx) + tx;
     const int64_t gy = static_cast<int64_t>(p.gy) + ty;
     const int64_t lx = gx & mask, ly = gy & mask;
     const int64_t count = p.count;
     if (lx + h <= mask && ly + h <= mask) {
-      // All four lookups fall in one chunk and one z slab: one address computation.
-      const MapChunk* c = raster_.chunk(gx, gy);
-      if (c == nullptr) continue;
-      const RasterLayer& L = c->layer(layer);
-      const int32_t zi = (p.zb >> L.z_shift) - L.z_lo;
-      if (zi < 0 || zi >= L.nz) continue;
-      const uint8_t* base = L.data + (static_cast<size_t>(zi) << (2 * shift)) +
-                            (static_cast<size_t>(ly) << shift) + static_cast<size_t>(lx);
-      const size_t dy = static_cast<size_t>(h) * row;
-      s00 += count * base[0];
-      s10 += count * base[h];
-      s01 += count * base[dy];
-      s11 += count * base[dy + h];
+      // All four cells lie in one chunk: four span reads.
+      if ((gx >> shift) != cached_cx || (gy >> shift) != cached_cy) {
+        cached_cx = gx >> shift;
+        cached_cy = gy >> shift;
+        const MapChunk* c = raster_.chunk(gx, gy);
+        L = c != nullptr ? &c->layer(layer) : nullptr;
+      }
+      if (L == nullptr) continue;
+      const size_t i = (static_cast<size_t>(ly) << shift) + static_cast<size_t>(lx);
+      s00 += count * MapChunk::spanValue(*L, i, p.zb);
+      s10 += count * MapChunk::spanValue(*L, i + h, p.zb);
+      s01 += count * MapChunk::spanValue(*L, i + dy, p.zb);
+      s11 += count * MapChunk::spanValue(*L, i + dy + h, p.zb);
     } else {
       s00 += count * raster_.value(layer, gx, gy, p.zb);
       s10 += count * raster_.value(layer, gx + h, gy, p.zb);
@@ -196,19 +202,15 @@ void SearchProblem::scoreBlock(int heading_index, int tx0, int ty0, int nx, int 
       int64_t gx = static_cast<int64_t>(p.gx) + tx0;
       int i = 0;
       while (i < nx) {
-        // One segment: the part of the row inside one chunk.
+        // One segment: the part of the row inside one chunk (consecutive cell spans).
         const int seg = static_cast<int>(std::min<int64_t>(nx - i, mask + 1 - (gx & mask)));
         const MapChunk* c = raster_.chunk(gx, gy);
         if (c != nullptr) {
           const RasterLayer& L = c->layer(0);
-          const int32_t zi = p.zb - L.z_lo;
-          if (zi >= 0 && zi < L.nz) {
-            const uint8_t* src = L.data + (static_cast<size_t>(zi) << (2 * shift)) +
-                                 (static_cast<size_t>(gy & mask) << shift) +
-                                 static_cast<size_t>(gx & mask);
-            int32_t* dst = row + i;
-            for (int k = 0; k < seg; ++k) dst[k] += count * src[k];
-          }
+          const size_t first =
+              (static_cast<size_t>(gy & mask) << shift) + static_cast<size_t>(gx & mask);
+          for (int k = 0; k < seg; ++k)
+            row[i + k] += count * MapChunk::spanValue(L, first + k, p.zb);
         }
         i += seg;
         gx += seg;

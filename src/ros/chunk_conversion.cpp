@@ -13,22 +13,23 @@ void toMsg(const MapChunk& chunk, uint64_t map_version, const std::string& frame
   msg.chunk_y = chunk.id().y;
   msg.shift = chunk.shift();
   msg.map_version = map_version;
-  const size_t plane = static_cast<size_t>(chunk.cells()) * chunk.cells();
+  const size_t n_spans = 2 * static_cast<size_t>(chunk.cells()) * chunk.cells() + 2;
   size_t total = 0;
-  for (int k = 0; k < chunk.numLayers(); ++k) total += chunk.layer(k).nz * plane;
-  msg.data.resize(total);
+  for (int k = 0; k < chunk.numLayers(); ++k) total += chunk.layer(k).value_count;
+  msg.spans.resize(n_spans * chunk.numLayers());
+  msg.values.resize(total);
   msg.layers.resize(chunk.numLayers());
   size_t offset = 0;
   for (int k = 0; k < chunk.numLayers(); ++k) {
     const RasterLayer& L = chunk.layer(k);
     ChunkLayer& out = msg.layers[k];
-    out.z_lo = L.z_lo;
-    out.nz = L.nz;
     out.z_shift = L.z_shift;
-    out.offset = offset;
-    const size_t bytes = static_cast<size_t>(L.nz) * plane;
-    if (bytes > 0) std::copy(L.data, L.data + bytes, msg.data.begin() + offset);
-    offset += bytes;
+    out.spans_start = k * n_spans;
+    out.values_start = offset;
+    out.value_count = L.value_count;
+    std::copy(L.spans, L.spans + n_spans, msg.spans.begin() + k * n_spans);
+    std::copy(L.values, L.values + L.value_count, msg.values.begin() + offset);
+    offset += L.value_count;
   }
   msg.component_count.assign(chunk.mixtures().size(), 0);
   msg.components.clear();
@@ -51,22 +52,34 @@ Result<MapChunkConstPtr> fromMsg(const RasterChunk::ConstPtr& msg) {
   }
   auto chunk = std::make_shared<MapChunk>(ChunkId{msg->chunk_x, msg->chunk_y}, msg->shift);
   const size_t plane = static_cast<size_t>(chunk->cells()) * chunk->cells();
+  const size_t n_spans = 2 * plane + 2;
   std::vector<RasterLayer> layers;
   for (size_t k = 0; k < msg->layers.size(); ++k) {
     const ChunkLayer& in = msg->layers[k];
-    if (in.nz < 0 || in.z_shift < 0 || in.z_shift > 16) {
-      return R::failure("layer " + std::to_string(k) + " has invalid nz or z_shift");
+    const std::string which = "layer " + std::to_string(k);
+    if (in.z_shift < 0 || in.z_shift > 16) return R::failure(which + " has an invalid z_shift");
+    if (in.spans_start > msg->spans.size() || n_spans > msg->spans.size() - in.spans_start) {
+      return R::failure(which + " overruns the spans array");
     }
-    const uint64_t bytes = static_cast<uint64_t>(in.nz) * plane;
-    if (in.offset > msg->data.size() || bytes > msg->data.size() - in.offset) {
-      return R::failure("layer " + std::to_string(k) + " overruns the chunk data (" +
-                        std::to_string(msg->data.size()) + " bytes)");
+    if (in.values_start > msg->values.size() ||
+        in.value_count > msg->values.size() - in.values_start) {
+      return R::failure(which + " overruns the values array");
+    }
+    // Every span must lie inside the layer's values, in increasing order.
+    const uint32_t* spans = msg->spans.data() + in.spans_start;
+    for (size_t i = 0; i + 1 < n_spans / 2; ++i) {
+      if (spans[2 * i + 2] < spans[2 * i] || spans[2 * i + 2] > in.value_count) {
+        return R::failure(which + " has an inconsistent span at cell " + std::to_string(i));
+      }
+    }
+    if (spans[0] != 0 || spans[n_spans - 2] != in.value_count) {
+      return R::failure(which + " spans do not cover its values");
     }
     RasterLayer L;
-    L.z_lo = in.z_lo;
-    L.nz = in.nz;
     L.z_shift = in.z_shift;
-    L.data = msg->data.data() + in.offset;
+    L.spans = spans;
+    L.values = msg->values.data() + in.values_start;
+    L.value_count = in.value_count;
     layers.push_back(L);
   }
   if (layers.empty()) return R::failure("chunk has no layers");
@@ -89,7 +102,7 @@ Result<MapChunkConstPtr> fromMsg(const RasterChunk::ConstPtr& msg) {
     }
   }
   if (c != msg->components.size()) return R::failure("components array too long");
-  // The layers point into msg->data: the chunk holds the message.
+  // The layers point into the message's arrays: the chunk holds the message.
   // (ROS messages use boost::shared_ptr: a deleter that holds a copy bridges the two.)
   chunk->setLayers(std::move(layers),
                    std::shared_ptr<const void>(msg.get(), [keep = msg](const void*) {}));

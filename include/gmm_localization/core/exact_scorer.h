@@ -37,10 +37,13 @@ class ExactScorer {
 
  private:
   double floored(const CellIndex& c, double z) const;
+  double kernel(double d_cells) const;
+  static constexpr int kKernelTableSize = 1538;        // covers [0, 1.5] cells and one guard entry
+  static constexpr double kKernelTableScale = 1024.0;  // entries per cell
   const ChunkMap& map_;
   double floor_;
   RasterWindow window_;
-  double inv_two_s2_ = 0.0;  // 1 / (2 sigma^2), sigma in cells
+  std::vector<double> kernel_table_;
 };
 
 }  // namespace gmm_localization

@@ -57,7 +57,16 @@ struct MatchResult {
 
 /// Stage durations [s], filled when the caller supplies a clock (the core reads none itself).
 struct RegistrationTiming {
-  double filter_s = 0, search_s = 0, refine_s = 0, covariance_s = 0, obstacles_s = 0;
+  double filter_s = 0;  ///< filtering, height pre-alignment, per-heading rotation
+  double search_s = 0, refine_s = 0, covariance_s = 0, obstacles_s = 0;
+};
+
+/// The first stage of a match: the filtered scan, its height pre-alignment and the search
+/// problem (rotated, discretised points) over the request's window.
+struct PreparedSearch {
+  FilteredScan filtered;
+  double z_offset_m = 0.0;
+  SearchProblem problem;
 };
 
 class Registration {
@@ -75,6 +84,16 @@ class Registration {
                             std::vector<TraversalNode>* traversal = nullptr,
                             const std::function<double()>& now = nullptr,
                             RegistrationTiming* timing = nullptr) const;
+
+  /// The stages of match(), for tools that time or compare them (the benchmark runs both
+  /// searches on one prepared problem). Same failures as match().
+  Result<PreparedSearch> prepare(const ChunkMap& map, const PointList& base_points,
+                                 const MatchRequest& request) const;
+  /// Refinement, covariance, coverage check and obstacles after a search of `prepared`.
+  Result<MatchResult> finish(const ChunkMap& map, const PointList& base_points,
+                             const MatchRequest& request, PreparedSearch prepared,
+                             const SearchOutcome& search, const std::function<double()>& now,
+                             RegistrationTiming* timing) const;
 
  private:
   RegistrationOptions options_;

@@ -1,0 +1,47 @@
+#pragma once
+// Data for the registration benchmark: test scans with ground truth from a KITTI-style
+// directory (the simulator's localization pass), the rasterized map around them, and target
+// point clouds for the point-cloud peers (NDT, GICP) from the mapping pass.
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "gmm_localization/core/chunk_map.h"
+#include "gmm_localization/core/map_store.h"
+#include "gmm_localization/core/result.h"
+#include "gmm_localization/core/scan_filter.h"
+
+namespace gmm_localization {
+namespace bench {
+
+struct BenchScan {
+  int index = 0;
+  Eigen::Isometry3d truth = Eigen::Isometry3d::Identity();  ///< base_link in map
+  PointList points;                                         ///< base_link [m]
+};
+
+/// `count` scans evenly spread over the directory's scans (all when count <= 0).
+Result<std::vector<BenchScan>> loadScans(const std::string& kitti_dir, int count);
+
+struct RasterStats {
+  size_t chunks = 0;
+  double seconds = 0.0;  ///< total rasterization time (tiles loaded beforehand)
+  size_t bytes = 0;
+};
+
+/// Loads the map's tiles around the poses and rasterizes every chunk within radius_m of any.
+Result<ChunkMap> rasterizeAround(const MapStore& store, const std::vector<Eigen::Vector3d>& centres,
+                                 double radius_m, const RasterOptions& options, RasterStats& stats);
+
+/// Mapping-pass points (KITTI directory with poses) within radius_m of `centre`, voxel
+/// downsampled to voxel_m, in the map frame: the kind of map NDT/GICP localizers use.
+Result<PointList> targetCloud(const std::string& mapping_dir, const Eigen::Vector3d& centre,
+                              double radius_m, double voxel_m);
+
+double median(std::vector<double> v);
+double percentile(std::vector<double> v, double p);
+
+}  // namespace bench
+}  // namespace gmm_localization

@@ -1,0 +1,332 @@
+// bench_registration: the registration benchmark of issue 3. Prints markdown tables of search
+// time, evaluations and equality with the exhaustive search for the paper's window and a
+// tracking window, success and time of PCL NDT and GICP from the same offsets, and time against
+// scan size. All numbers come from this run, as ratios where the machine's noise matters.
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+#include <fstream>
+#include <random>
+#include <string>
+
+#include "bench_data.h"
+#include "bench_peers.h"
+#include "gmm_localization/core/exact_scorer.h"
+#include "gmm_localization/core/registration.h"
+
+using namespace gmm_localization;
+using namespace gmm_localization::bench;
+
+namespace {
+
+double now() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+struct Options {
+  std::string map_dir, scans_dir, mapping_dir;
+  int count = 30;
+  int exhaustive_every = 3;  // exhaustive reference on every n-th scan of each window
+  int peer_count = 20;
+  uint32_t seed = 1;
+  double offset_m = 10.0, offset_deg = 15.0;
+  double raster_radius_m = 110.0;
+  bool sizes = true;
+  RegistrationOptions reg;
+  RasterOptions raster;
+};
+
+void usage() {
+  std::printf(
+      "bench_registration --map DIR --scans KITTI_DIR [--mapping KITTI_DIR] [options]\n"
+      "  --map DIR            Gaussian mixture map (build_map output)\n"
+      "  --scans DIR          localization scans with ground-truth poses (simulate --kitti)\n"
+      "  --mapping DIR        mapping-pass scans: target clouds for PCL NDT/GICP (optional)\n"
+      "  --count N            test scans (30)\n"
+      "  --peer-count N       scans for the NDT/GICP comparison (20; 0 = skip)\n"
+      "  --exhaustive-every N check branch-and-bound against exhaustive on every N-th scan (3)\n"
+      "  --offset-m M         initial offsets uniform in a disc of this radius (10)\n"
+      "  --offset-deg D       and within +-D degrees of heading (15)\n"
+      "  --seed N             offset seed (1)\n"
+      "  --heading-step-deg D search heading step (0.5)\n"
+      "  --max-points N       search points after voxelling (registration default)\n"
+      "  --voxel M            search voxel (registration default)\n"
+      "  --z-period N         raster z coarsening period (raster default)\n"
+      "  --no-sizes           skip the scan-size table\n");
+}
+
+bool parse(int argc, char** argv, Options& o) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto next = [&]() -> const char* { return i + 1 < argc ? argv[++i] : nullptr; };
+    const char* v = nullptr;
+    if (a == "--help" || a == "-h") return false;
+    if (a == "--no-sizes") {
+      o.sizes = false;
+      continue;
+    }
+    if ((v = next()) == nullptr) {
+      std::fprintf(stderr, "option %s needs a value\n", a.c_str());
+      return false;
+    }
+    if (a == "--map")
+      o.map_dir = v;
+    else if (a == "--scans")
+      o.scans_dir = v;
+    else if (a == "--mapping")
+      o.mapping_dir = v;
+    else if (a == "--count")
+      o.count = std::atoi(v);
+    else if (a == "--peer-count")
+      o.peer_count = std::atoi(v);
+    else if (a == "--exhaustive-every")
+      o.exhaustive_every = std::atoi(v);
+    else if (a == "--offset-m")
+      o.offset_m = std::atof(v);
+    else if (a == "--offset-deg")
+      o.offset_deg = std::atof(v);
+    else if (a == "--seed")
+      o.seed = static_cast<uint32_t>(std::atoi(v));
+    else if (a == "--heading-step-deg")
+      o.reg.heading_step_rad = std::atof(v) * M_PI / 180.0;
+    else if (a == "--max-points")
+      o.reg.filter.max_points = static_cast<size_t>(std::atoi(v));
+    else if (a == "--voxel")
+      o.reg.filter.voxel_m = std::atof(v);
+    else if (a == "--z-period")
+      o.raster.z_coarsening_period = std::atoi(v);
+    else {
+      std::fprintf(stderr, "unknown option %s\n", a.c_str());
+      return false;
+    }
+  }
+  if (o.map_dir.empty() || o.scans_dir.empty()) {
+    std::fprintf(stderr, "--map and --scans are required\n");
+    return false;
+  }
+  return true;
+}
+
+double yawOf(const Eigen::Isometry3d& T) { return std::atan2(T.linear()(1, 0), T.linear()(0, 0)); }
+double angleDiff(double a, double b) { return std::atan2(std::sin(a - b), std::cos(a - b)); }
+
+/// A prior offset from the truth: uniform in a disc of radius r and +-h in heading.
+Pose6 offsetPrior(const Eigen::Isometry3d& truth, double r, double h, std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Pose6 p = fromIsometry(truth);
+  const double rho = r * std::sqrt(u(rng)), phi = 2.0 * M_PI * u(rng);
+  p.x += rho * std::cos(phi);
+  p.y += rho * std::sin(phi);
+  p.yaw += (2.0 * u(rng) - 1.0) * h;
+  return p;
+}
+
+struct WindowRow {
+  std::string name;
+  std::vector<double> filter_ms, search_ms, total_ms, fraction, error_m, error_deg;
+  std::vector<double> points, lookups;  // search points per heading; evaluations x points
+  int success = 0, runs = 0, equal = 0, compared = 0, failures = 0;
+  std::vector<double> exhaustive_ms;
+};
+
+bool success(double err_m, double err_deg) { return err_m < 0.5 && err_deg < 1.0; }
+
+void runWindow(const Options& o, const ChunkMap& map, const std::vector<BenchScan>& scans,
+               double half_m, double half_deg, double off_m, double off_deg, WindowRow& row) {
+  const Registration reg(o.reg);
+  std::mt19937 rng(o.seed);
+  for (size_t i = 0; i < scans.size(); ++i) {
+    const BenchScan& s = scans[i];
+    MatchRequest req;
+    req.prior = offsetPrior(s.truth, off_m, off_deg * M_PI / 180.0, rng);
+    req.half_x_m = req.half_y_m = half_m;
+    req.half_heading_rad = half_deg * M_PI / 180.0;
+    ++row.runs;
+    const double t0 = now();
+    auto prepared = reg.prepare(map, s.points, req);
+    if (!prepared.ok()) {
+      ++row.failures;
+      std::fprintf(stderr, "scan %d: %s\n", s.index, prepared.error().c_str());
+      continue;
+    }
+    const double t1 = now();
+    const SearchOutcome bb = branchAndBoundSearch(prepared->problem, o.reg.branch_and_bound);
+    const double t2 = now();
+    if (o.exhaustive_every > 0 && i % o.exhaustive_every == 0) {
+      const double te = now();
+      const SearchOutcome ex = exhaustiveSearch(prepared->problem);
+      row.exhaustive_ms.push_back((now() - te) * 1e3);
+      ++row.compared;
+      row.equal += (ex.score == bb.score && ex.heading_index == bb.heading_index &&
+                    ex.tx == bb.tx && ex.ty == bb.ty);
+    }
+    const double n = static_cast<double>(prepared->problem.points(0).size());
+    const double t3 = now();
+    auto r = reg.finish(map, s.points, req, std::move(prepared.value()), bb, nullptr, nullptr);
+    const double t4 = now();
+    row.filter_ms.push_back((t1 - t0) * 1e3);
+    row.search_ms.push_back((t2 - t1) * 1e3);
+    row.total_ms.push_back((t2 - t0 + t4 - t3) * 1e3);
+    row.fraction.push_back(bb.stats.fraction());
+    row.points.push_back(n);
+    row.lookups.push_back(n * bb.stats.evaluations);
+    if (!r.ok()) {
+      ++row.failures;
+      std::fprintf(stderr, "scan %d: %s\n", s.index, r.error().c_str());
+      continue;
+    }
+    const Pose6 t = fromIsometry(s.truth);
+    const double e = std::hypot(r->pose.x - t.x, r->pose.y - t.y);
+    const double eh = std::abs(angleDiff(r->pose.yaw, t.yaw)) * 180.0 / M_PI;
+    row.error_m.push_back(e);
+    row.error_deg.push_back(eh);
+    row.success += success(e, eh);
+  }
+}
+
+void printWindows(const std::vector<WindowRow>& rows) {
+  std::printf(
+      "| window | scans | search points (median) | prepare ms (median) | search ms median / p99 | "
+      "match total ms median / p99 | evaluations, %% of exhaustive (median / max) | table "
+      "lookups, millions (median / max) | equal to exhaustive | exhaustive search ms (median) | "
+      "success <0.5 m, <1 deg | error after refinement median / p99 |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  for (const WindowRow& r : rows) {
+    std::printf(
+        "| %s | %d | %.0f | %.1f | %.1f / %.1f | %.1f / %.1f | %.3f / %.3f | %.1f / %.1f | %d/%d "
+        "| %.0f | %d/%d (%.1f%%) | %.3f m, %.3f deg / %.3f m |\n",
+        r.name.c_str(), r.runs, median(r.points), median(r.filter_ms), median(r.search_ms),
+        percentile(r.search_ms, 99), median(r.total_ms), percentile(r.total_ms, 99),
+        100 * median(r.fraction), 100 * percentile(r.fraction, 100), median(r.lookups) / 1e6,
+        percentile(r.lookups, 100) / 1e6, r.equal, r.compared, median(r.exhaustive_ms), r.success,
+        r.runs, 100.0 * r.success / std::max(1, r.runs), median(r.error_m), median(r.error_deg),
+        percentile(r.error_m, 99));
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options o;
+  if (!parse(argc, argv, o)) {
+    usage();
+    return 2;
+  }
+  auto store = MapStore::open(o.map_dir);
+  if (!store.ok()) {
+    std::fprintf(stderr, "%s\n", store.error().c_str());
+    return 1;
+  }
+  auto scans = loadScans(o.scans_dir, o.count);
+  if (!scans.ok()) {
+    std::fprintf(stderr, "%s\n", scans.error().c_str());
+    return 1;
+  }
+  std::vector<Eigen::Vector3d> centres;
+  size_t raw = 0;
+  for (const BenchScan& s : scans.value()) {
+    centres.push_back(s.truth.translation());
+    raw += s.points.size();
+  }
+  RasterStats rs;
+  auto map = rasterizeAround(store.value(), centres, o.raster_radius_m, o.raster, rs);
+  if (!map.ok()) {
+    std::fprintf(stderr, "%s\n", map.error().c_str());
+    return 1;
+  }
+  char date[32];
+  const std::time_t t = std::time(nullptr);
+  std::strftime(date, sizeof(date), "%Y-%m-%d", std::localtime(&t));
+  std::printf("# Registration benchmark, %s, one thread\n\n", date);
+  std::printf("map %s; %zu test scans from %s, %.0f raw points per scan on average\n",
+              o.map_dir.c_str(), scans->size(), o.scans_dir.c_str(),
+              static_cast<double>(raw) / scans->size());
+  std::printf(
+      "rasterized %zu chunks of %d x %d cells in %.2f s (%.1f ms per chunk), %.1f MB (%.2f MB per "
+      "chunk)\n\n",
+      rs.chunks, o.raster.chunkCells(), o.raster.chunkCells(), rs.seconds,
+      1e3 * rs.seconds / std::max<size_t>(1, rs.chunks), rs.bytes / 1e6,
+      rs.bytes / 1e6 / std::max<size_t>(1, rs.chunks));
+
+  std::vector<WindowRow> rows(2);
+  rows[0].name = "paper: 25 m x 25 m, +-15 deg (offsets within " + std::to_string(int(o.offset_m)) +
+                 " m, " + std::to_string(int(o.offset_deg)) + " deg)";
+  runWindow(o, map.value(), scans.value(), 12.5, 15.0, o.offset_m, o.offset_deg, rows[0]);
+  rows[1].name = "tracking: +-2 m, +-3 deg (offsets within 1.5 m, 2.5 deg)";
+  runWindow(o, map.value(), scans.value(), 2.0, 3.0, 1.5, 2.5, rows[1]);
+  std::printf("## Search windows\n\n");
+  printWindows(rows);
+
+  if (o.peer_count > 0 && !o.mapping_dir.empty()) {
+    std::printf("\n## Peers from the same offsets (within %.0f m, %.0f deg)\n\n", o.offset_m,
+                o.offset_deg);
+    std::printf("| matcher | scans | success <0.5 m, <1 deg | time per match ms median / p99 |\n");
+    std::printf("|---|---|---|---|\n");
+    PeerOptions po;
+    std::vector<PeerMatcher> peers;
+    for (auto kind : {PeerMatcher::Kind::kNdt, PeerMatcher::Kind::kGicp}) {
+      PeerMatcher peer(kind, po);
+      std::mt19937 rng(o.seed);  // the same offsets as the paper window above
+      int ok = 0, n = 0;
+      std::vector<double> ms;
+      for (size_t i = 0; i < scans->size() && n < o.peer_count; ++i) {
+        const BenchScan& s = scans.value()[i];
+        const Pose6 prior = offsetPrior(s.truth, o.offset_m, o.offset_deg * M_PI / 180.0, rng);
+        auto target = targetCloud(o.mapping_dir, s.truth.translation(), 80.0, 0.5);
+        if (!target.ok()) {
+          std::fprintf(stderr, "%s\n", target.error().c_str());
+          continue;
+        }
+        peer.setTarget(target.value());
+        const PeerResult r = peer.align(s.points, toIsometry(prior));
+        const double e = (r.pose.translation() - s.truth.translation()).head<2>().norm();
+        const double eh = std::abs(angleDiff(yawOf(r.pose), yawOf(s.truth))) * 180.0 / M_PI;
+        ok += success(e, eh);
+        ++n;
+        ms.push_back(r.seconds * 1e3);
+      }
+      std::printf("| %s | %d | %d/%d (%.1f%%) | %.0f / %.0f |\n", peer.name().c_str(), n, ok, n,
+                  100.0 * ok / std::max(1, n), median(ms), percentile(ms, 99));
+    }
+    std::printf("| gmm_localization (paper window, above) | %d | %d/%d (%.1f%%) | %.0f / %.0f |\n",
+                rows[0].runs, rows[0].success, rows[0].runs,
+                100.0 * rows[0].success / std::max(1, rows[0].runs), median(rows[0].total_ms),
+                percentile(rows[0].total_ms, 99));
+  }
+
+  if (o.sizes) {
+    std::printf("\n## Scan size (paper window; raw points subsampled evenly)\n\n");
+    std::printf(
+        "| raw points | prepare ms (median) | search ms (median) | match total ms (median) | "
+        "success |\n");
+    std::printf("|---|---|---|---|---|\n");
+    for (size_t size : {20000, 70000, 140000, 280000}) {
+      std::vector<BenchScan> sub;
+      for (const BenchScan& s : scans.value()) {
+        BenchScan c = s;
+        if (c.points.size() > size) {
+          PointList p;
+          const double stride = static_cast<double>(c.points.size()) / size;
+          for (size_t k = 0; k < size; ++k) p.push_back(c.points[static_cast<size_t>(k * stride)]);
+          c.points = std::move(p);
+        } else if (c.points.size() < size) {
+          // Pad with repeated points (a denser revolution of the same scene).
+          PointList p = c.points;
+          for (size_t k = 0; p.size() < size; ++k) p.push_back(c.points[k % c.points.size()]);
+          c.points = std::move(p);
+        }
+        sub.push_back(std::move(c));
+      }
+      WindowRow row;
+      Options os = o;
+      os.exhaustive_every = 0;
+      runWindow(os, map.value(), sub, 12.5, 15.0, o.offset_m, o.offset_deg, row);
+      std::printf("| %zu | %.1f | %.1f | %.1f | %d/%d |\n", size, median(row.filter_ms),
+                  median(row.search_ms), median(row.total_ms), row.success, row.runs);
+    }
+  }
+  return 0;
+}
