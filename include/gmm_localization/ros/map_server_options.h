@@ -1,0 +1,35 @@
+#pragma once
+// Parameters of the map server (config/map_server.yaml documents each key), loaded once from the
+// private node handle and validated; a bad or missing value throws ConfigError naming the key.
+
+#include <optional>
+#include <string>
+
+#include <ros/node_handle.h>
+
+#include "gmm_localization/ros/map_server_engine.h"
+#include "gmm_localization/ros/map_server_planner.h"
+
+namespace gmm_localization {
+namespace node {
+
+struct MapServerOptions {
+  std::string map_directory;  ///< required: a directory written by build_map
+  std::string map_frame = "map";
+  std::string base_frame = "base_link";
+  /// Radii, hysteresis, raster options and worker threads (map_server_engine.h).
+  ChunkEngineOptions engine;
+  double update_period_s = 0.5;  ///< vehicle position lookup and index refresh period [s]
+  /// Served before any TF or pose hint exists (map frame [m]); unset: wait for a position.
+  std::optional<PlanCentre> initial_position;
+  double pose_hint_hold_s = 10.0;    ///< a pose hint is served beside TF this long [s]
+  double map_cloud_radius_m = 60.0;  ///< map_cloud covers cells within this of the vehicle [m]
+  double map_cloud_period_s = 2.0;   ///< map_cloud is rebuilt at most this often [s]
+};
+
+/// Reads and validates the options (throws ConfigError). The map directory is only required to
+/// be non-empty here; the server reports an unreadable map itself.
+MapServerOptions loadMapServerOptions(const ros::NodeHandle& pnh);
+
+}  // namespace node
+}  // namespace gmm_localization

@@ -1,0 +1,196 @@
+// MapChunk <-> RasterChunk (chunk_conversion.h): exact round trip, zero-copy fromMsg that keeps
+// the message alive, and every malformed message (arrays too short, spans that disagree with
+// the values, invalid mixtures) rejected with a reason.
+#include "gmm_localization/ros/chunk_conversion.h"
+
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+#include <boost/make_shared.hpp>
+
+#include "gmm_localization/core/rasterizer.h"
+
+namespace gmm_localization {
+namespace node {
+namespace {
+
+RasterOptions options() {
+  RasterOptions o;
+  o.chunk_shift = 4;
+  o.num_layers = 3;
+  o.z_coarsening_period = 1;
+  return o;
+}
+
+/// A random map over tiles (0..1, 0..1) of 16 cells: 0-2 components per cell.
+GmmMap randomMap(uint32_t seed) {
+  MapGeometry g;
+  g.tile_size_cells = 16;
+  GmmMap map(g);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> mean(-1.f, 4.f), sigma(0.03f, 0.5f), w(0.2f, 0.8f);
+  std::uniform_int_distribution<int> k(0, 2);
+  for (int tx = 0; tx < 2; ++tx) {
+    for (int ty = 0; ty < 2; ++ty) {
+      auto tile = std::make_shared<GmmTile>(TileId{tx, ty}, 16);
+      for (GaussianMixture1D& cell : tile->cells()) {
+        const int n = k(rng);
+        const float w0 = w(rng);
+        if (n == 1) cell.add({1.f, mean(rng), sigma(rng)});
+        if (n == 2) {
+          cell.add({w0, mean(rng), sigma(rng)});
+          cell.add({1.f - w0, mean(rng), sigma(rng)});
+        }
+      }
+      map.insert(tile);
+    }
+  }
+  return map;
+}
+
+MapChunkConstPtr rasterized(ChunkId id = {0, 0}) {
+  auto r = rasterizeChunk(randomMap(3), id, options());
+  EXPECT_TRUE(r.ok()) << r.error();
+  return *r;
+}
+
+RasterChunk::Ptr toMessage(const MapChunk& chunk) {
+  auto msg = boost::make_shared<RasterChunk>();
+  toMsg(chunk, 17, "map", ros::Time(12, 34), *msg);
+  return msg;
+}
+
+TEST(ChunkConversion, RoundTripIsExact) {
+  const MapChunkConstPtr chunk = rasterized({1, 0});
+  const RasterChunk::Ptr msg = toMessage(*chunk);
+  EXPECT_EQ(msg->chunk_x, 1);
+  EXPECT_EQ(msg->chunk_y, 0);
+  EXPECT_EQ(msg->shift, 4);
+  EXPECT_EQ(msg->map_version, 17u);
+  EXPECT_EQ(msg->header.frame_id, "map");
+  EXPECT_EQ(msg->header.stamp, ros::Time(12, 34));
+  ASSERT_EQ(msg->layers.size(), 4u);
+  auto back = fromMsg(msg);
+  ASSERT_TRUE(back.ok()) << back.error();
+  const MapChunk& b = **back;
+  EXPECT_EQ(b.id(), chunk->id());
+  EXPECT_TRUE(b.sameTables(*chunk));
+  // Value by value too, over a z range wider than the map's.
+  size_t nonzero = 0;
+  for (int k = 0; k < b.numLayers(); ++k) {
+    EXPECT_EQ(b.layer(k).z_shift, chunk->layer(k).z_shift);
+    for (int32_t zb = -30; zb < 60; ++zb) {
+      for (int y = 0; y < 16; ++y) {
+        for (int x = 0; x < 16; ++x) {
+          ASSERT_EQ(b.value(k, zb, x, y), chunk->value(k, zb, x, y));
+          nonzero += b.value(k, zb, x, y) > 0;
+        }
+      }
+    }
+  }
+  EXPECT_GT(nonzero, 1000u) << "the test map must exercise the tables";
+  EXPECT_EQ(b.mixtures(), chunk->mixtures());
+  EXPECT_EQ(b.bytes(), chunk->bytes());
+}
+
+TEST(ChunkConversion, FromMsgSharesTheMessageAndKeepsItAlive) {
+  RasterChunk::Ptr msg = toMessage(*rasterized());
+  const RasterChunk* raw = msg.get();
+  auto chunk = fromMsg(msg);
+  ASSERT_TRUE(chunk.ok());
+  EXPECT_GT(msg.use_count(), 1) << "the chunk holds the message";
+  for (int k = 0; k < (*chunk)->numLayers(); ++k) {
+    const RasterLayer& L = (*chunk)->layer(k);
+    EXPECT_EQ(L.spans, msg->spans.data() + msg->layers[k].spans_start) << "layer " << k;
+    EXPECT_EQ(L.values, msg->values.data() + msg->layers[k].values_start) << "layer " << k;
+  }
+  ASSERT_FALSE(msg->values.empty());
+  const uint8_t first = msg->values.front();
+  msg.reset();  // the chunk alone keeps the message alive
+  EXPECT_EQ((*chunk)->layer(0).values[0], first);
+  EXPECT_EQ((*chunk)->layer(0).values, raw->values.data() + raw->layers[0].values_start);
+}
+
+TEST(ChunkConversion, EmptyChunkRoundTrips) {
+  auto chunk = rasterizeChunk(randomMap(3), {7, 7}, options());  // no tile there
+  ASSERT_TRUE(chunk.ok());
+  auto msg = toMessage(**chunk);
+  EXPECT_TRUE(msg->values.empty());
+  auto back = fromMsg(msg);
+  ASSERT_TRUE(back.ok()) << back.error();
+  EXPECT_EQ((*back)->value(0, 0, 3, 3), 0);
+  EXPECT_TRUE((*back)->sameTables(**chunk));
+  EXPECT_EQ((*back)->mixtures(), (*chunk)->mixtures());
+}
+
+/// fromMsg of a copy of a good message after `mutate` fails with a reason containing `what`.
+template <typename F>
+void expectRejected(F mutate, const std::string& what) {
+  auto msg = boost::make_shared<RasterChunk>(*toMessage(*rasterized()));
+  mutate(*msg);
+  auto r = fromMsg(msg);
+  ASSERT_FALSE(r.ok()) << "accepted a message that should fail with '" << what << "'";
+  EXPECT_NE(r.error().find(what), std::string::npos) << r.error();
+}
+
+/// Index in msg.spans of the first cell of layer k with a non-empty span.
+size_t firstNonEmptyCell(const RasterChunk& m, size_t k) {
+  const size_t base = m.layers[k].spans_start;
+  for (size_t i = 0;; ++i) {
+    if (m.spans[base + 2 * i + 2] > m.spans[base + 2 * i]) return i;
+  }
+}
+
+TEST(ChunkConversion, MalformedMessagesAreRejected) {
+  EXPECT_FALSE(fromMsg(RasterChunk::ConstPtr()).ok());
+  expectRejected([](RasterChunk& m) { m.shift = 3; }, "shift");
+  expectRejected([](RasterChunk& m) { m.shift = 11; }, "shift");
+  expectRejected([](RasterChunk& m) { m.layers.clear(); }, "no layers");
+  expectRejected([](RasterChunk& m) { m.layers[1].z_shift = -1; }, "z_shift");
+  expectRejected([](RasterChunk& m) { m.layers[1].z_shift = 40; }, "z_shift");
+  // Arrays too short for the layers that point into them.
+  expectRejected([](RasterChunk& m) { m.spans.pop_back(); }, "spans");
+  expectRejected([](RasterChunk& m) { m.layers.back().spans_start += 1; }, "spans");
+  expectRejected([](RasterChunk& m) { m.layers[0].spans_start = ~uint64_t{0}; }, "spans");
+  expectRejected([](RasterChunk& m) { m.values.pop_back(); }, "values");
+  expectRejected([](RasterChunk& m) { m.layers[0].values_start = ~uint64_t{0}; }, "values");
+  expectRejected([](RasterChunk& m) { m.layers[0].value_count += 1000000; }, "values");
+  // Spans that disagree with the values: decreasing, beyond the layer, not covering it.
+  expectRejected(
+      [](RasterChunk& m) {
+        const size_t i = firstNonEmptyCell(m, 0);
+        const size_t base = m.layers[0].spans_start;
+        std::swap(m.spans[base + 2 * i], m.spans[base + 2 * i + 2]);
+      },
+      "span");
+  expectRejected(
+      [](RasterChunk& m) {
+        const size_t base = m.layers[0].spans_start;
+        const size_t last = 2 * 16 * 16;  // the closing offset
+        m.spans[base + last] = m.layers[0].value_count + 1;
+      },
+      "span");
+  expectRejected([](RasterChunk& m) { m.layers[0].value_count -= 1; }, "span");
+  // Mixtures.
+  expectRejected([](RasterChunk& m) { m.component_count.pop_back(); }, "component_count");
+  expectRejected([](RasterChunk& m) { m.components.pop_back(); }, "components array");
+  expectRejected([](RasterChunk& m) { m.components.push_back(1.f); }, "too long");
+  expectRejected(
+      [](RasterChunk& m) {
+        for (uint8_t& k : m.component_count) {
+          if (k > 0) {
+            k = 4;
+            break;
+          }
+        }
+      },
+      "more than 3");
+  expectRejected([](RasterChunk& m) { m.components.at(2) = 0.f; }, "invalid component");  // sigma
+  expectRejected([](RasterChunk& m) { m.components.at(0) = -0.5f; }, "invalid component");
+  expectRejected([](RasterChunk& m) { m.components.at(1) = NAN; }, "invalid component");
+}
+
+}  // namespace
+}  // namespace node
+}  // namespace gmm_localization

@@ -1,0 +1,209 @@
+// sensor_msgs/PointCloud2 <-> CloudData (cloud_conversion.h): round trips, the field types a
+// LIDAR driver may use, organised clouds with row padding, and malformed clouds rejected with a
+// reason (missing fields, sizes that disagree, wrong types, big-endian).
+#include "gmm_localization/ros/cloud_conversion.h"
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include <gtest/gtest.h>
+
+namespace gmm_localization {
+namespace node {
+namespace {
+
+using sensor_msgs::PointCloud2;
+using sensor_msgs::PointField;
+
+CloudData sample(size_t n) {
+  CloudData c;
+  for (size_t i = 0; i < n; ++i) {
+    c.points.emplace_back(0.5f * i, -1.0f * i, 0.25f * i - 3.f);
+    c.time_s.push_back(1e-4f * i);
+    c.intensity.push_back(static_cast<float>(i % 256));
+    c.ring.push_back(static_cast<uint16_t>(i % 32));
+    c.label.push_back(static_cast<uint8_t>(i % 3));
+  }
+  return c;
+}
+
+const PointField* field(const PointCloud2& m, const std::string& name) {
+  for (const auto& f : m.fields) {
+    if (f.name == name) return &f;
+  }
+  return nullptr;
+}
+
+/// A cloud with the given fields (name, datatype) packed in order, rows padded by row_pad bytes.
+PointCloud2 makeCloud(const std::vector<std::pair<std::string, uint8_t>>& fields, uint32_t width,
+                      uint32_t height, uint32_t row_pad = 0) {
+  PointCloud2 m;
+  uint32_t offset = 0;
+  for (const auto& [name, type] : fields) {
+    PointField f;
+    f.name = name;
+    f.offset = offset;
+    f.datatype = type;
+    f.count = 1;
+    m.fields.push_back(f);
+    offset += type == PointField::FLOAT64                                 ? 8
+              : (type == PointField::UINT16 || type == PointField::INT16) ? 2
+              : (type == PointField::UINT8 || type == PointField::INT8)   ? 1
+                                                                          : 4;
+  }
+  m.width = width;
+  m.height = height;
+  m.point_step = offset;
+  m.row_step = offset * width + row_pad;
+  m.data.assign(static_cast<size_t>(m.row_step) * height, 0);
+  return m;
+}
+
+template <typename T>
+void put(PointCloud2& m, size_t row, size_t col, const std::string& name, T v) {
+  const PointField* f = field(m, name);
+  ASSERT_NE(f, nullptr);
+  std::memcpy(m.data.data() + row * m.row_step + col * m.point_step + f->offset, &v, sizeof(T));
+}
+
+TEST(CloudConversion, RoundTripKeepsEveryField) {
+  const CloudData in = sample(100);
+  PointCloud2 msg;
+  toCloudMsg(in, msg);
+  EXPECT_EQ(msg.width, 100u);
+  EXPECT_EQ(msg.height, 1u);
+  EXPECT_FALSE(msg.is_bigendian);
+  EXPECT_EQ(msg.data.size(), static_cast<size_t>(msg.row_step));
+  for (const char* name : {"x", "y", "z", "intensity", "time", "ring", "label"}) {
+    EXPECT_NE(field(msg, name), nullptr) << name;
+  }
+  auto out = fromCloudMsg(msg);
+  ASSERT_TRUE(out.ok()) << out.error();
+  EXPECT_EQ(out->points, in.points);
+  EXPECT_EQ(out->time_s, in.time_s);
+  EXPECT_EQ(out->intensity, in.intensity);
+  EXPECT_EQ(out->ring, in.ring);
+  EXPECT_EQ(out->label, in.label);
+}
+
+TEST(CloudConversion, OptionalFieldsAndExtraFloat) {
+  CloudData in = sample(10);
+  in.ring.clear();
+  in.label.resize(3);  // size disagrees with the points: left out, not written half
+  std::vector<float> likelihood(10, -1.5f);
+  PointCloud2 msg;
+  toCloudMsg(in, msg, "likelihood", likelihood);
+  EXPECT_EQ(field(msg, "ring"), nullptr);
+  EXPECT_EQ(field(msg, "label"), nullptr);
+  ASSERT_NE(field(msg, "likelihood"), nullptr);
+  auto out = fromCloudMsg(msg);
+  ASSERT_TRUE(out.ok());
+  EXPECT_TRUE(out->ring.empty());
+  EXPECT_TRUE(out->label.empty());
+  EXPECT_EQ(out->time_s, in.time_s);
+  float v;
+  std::memcpy(&v, msg.data.data() + 3 * msg.point_step + field(msg, "likelihood")->offset, 4);
+  EXPECT_EQ(v, -1.5f);
+}
+
+TEST(CloudConversion, NanPointsAreKept) {
+  CloudData in = sample(3);
+  in.points[1].x() = std::numeric_limits<float>::quiet_NaN();
+  PointCloud2 msg;
+  toCloudMsg(in, msg);
+  auto out = fromCloudMsg(msg);
+  ASSERT_TRUE(out.ok());
+  ASSERT_EQ(out->points.size(), 3u);
+  EXPECT_TRUE(std::isnan(out->points[1].x()));
+}
+
+TEST(CloudConversion, EmptyCloud) {
+  PointCloud2 msg;
+  toCloudMsg(CloudData(), msg);
+  auto out = fromCloudMsg(msg);
+  ASSERT_TRUE(out.ok()) << out.error();
+  EXPECT_TRUE(out->points.empty());
+}
+
+TEST(CloudConversion, Float64XyzOusterTimeAndOrganisedRows) {
+  // 3 x 2 organised cloud, float64 x/y/z, uint32 "t" in nanoseconds, 5 bytes of row padding.
+  PointCloud2 m = makeCloud({{"x", PointField::FLOAT64},
+                             {"y", PointField::FLOAT64},
+                             {"z", PointField::FLOAT64},
+                             {"t", PointField::UINT32},
+                             {"ring", PointField::UINT16}},
+                            3, 2, 5);
+  for (size_t r = 0; r < 2; ++r) {
+    for (size_t c = 0; c < 3; ++c) {
+      put<double>(m, r, c, "x", 1.0 + c);
+      put<double>(m, r, c, "y", 10.0 * r);
+      put<double>(m, r, c, "z", -2.0);
+      put<uint32_t>(m, r, c, "t", static_cast<uint32_t>(1000000 * (r * 3 + c)));
+      put<uint16_t>(m, r, c, "ring", static_cast<uint16_t>(r));
+    }
+  }
+  auto out = fromCloudMsg(m);
+  ASSERT_TRUE(out.ok()) << out.error();
+  ASSERT_EQ(out->points.size(), 6u);
+  EXPECT_EQ(out->points[4], Eigen::Vector3f(2.f, 10.f, -2.f));
+  EXPECT_NEAR(out->time_s[5], 0.005, 1e-9);
+  EXPECT_EQ(out->ring[3], 1);
+  EXPECT_TRUE(out->intensity.empty());
+}
+
+/// fromCloudMsg of a valid float32 x/y/z/intensity cloud after `mutate` fails mentioning `what`.
+template <typename F>
+void expectRejected(F mutate, const std::string& what) {
+  PointCloud2 msg;
+  toCloudMsg(sample(8), msg);
+  mutate(msg);
+  auto r = fromCloudMsg(msg);
+  ASSERT_FALSE(r.ok()) << "accepted a cloud that should fail with '" << what << "'";
+  EXPECT_NE(r.error().find(what), std::string::npos) << r.error();
+}
+
+TEST(CloudConversion, MalformedCloudsAreRejected) {
+  auto remove = [](const std::string& name) {
+    return [name](PointCloud2& m) {
+      for (auto it = m.fields.begin(); it != m.fields.end(); ++it) {
+        if (it->name == name) {
+          m.fields.erase(it);
+          return;
+        }
+      }
+    };
+  };
+  expectRejected(remove("x"), "x, y or z");
+  expectRejected(remove("z"), "x, y or z");
+  expectRejected([](PointCloud2& m) { m.is_bigendian = true; }, "big-endian");
+  expectRejected([](PointCloud2& m) { m.data.pop_back(); }, "data size");
+  expectRejected([](PointCloud2& m) { m.width += 1; }, "exceeds row_step");
+  expectRejected([](PointCloud2& m) { m.height = 2; }, "data size");
+  expectRejected(
+      [](PointCloud2& m) {
+        m.point_step = 0;
+        m.row_step = 0;
+        m.data.clear();
+      },
+      "point_step is 0");
+  expectRejected(
+      [](PointCloud2& m) {
+        m.fields[0].datatype = PointField::INT32;  // x as an integer
+      },
+      "float32 or float64");
+  expectRejected([](PointCloud2& m) { m.fields[1].datatype = 99; }, "must be float32");
+  expectRejected([](PointCloud2& m) { m.fields[3].datatype = 42; }, "unknown datatype");
+  expectRejected([](PointCloud2& m) { m.fields[3].count = 0; }, "count 0");
+  expectRejected([](PointCloud2& m) { m.fields[2].offset = m.point_step - 2; }, "does not fit");
+  expectRejected(
+      [](PointCloud2& m) {
+        // A field that would read past the point: offset beyond point_step.
+        m.fields.back().offset = m.point_step;
+      },
+      "does not fit");
+}
+
+}  // namespace
+}  // namespace node
+}  // namespace gmm_localization
