@@ -140,7 +140,7 @@ Result<MatchResult> Registration::finish(const ChunkMap& map, const PointList& b
           .toRotationMatrix()
           .transpose()
           .cast<float>();
-  PointList refine_points = thin(f.points, options_.refine_max_points);
+  PointList refine_points = thin(f.voxels, options_.refine_max_points);
   for (Eigen::Vector3f& p : refine_points) p = unlevel * p;
   double reach = 0.0;
   for (const Eigen::Vector3f& p : refine_points) reach = std::max<double>(reach, p.norm());

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <unordered_map>
 
 #include <Eigen/Geometry>
 
@@ -16,6 +17,12 @@ std::string ScanFilterOptions::validate() const {
   if (!(max_height_m > min_height_m)) {
     return "min_height_m=" + std::to_string(min_height_m) +
            " must be below max_height_m=" + std::to_string(max_height_m);
+  }
+  if (!(ground_share >= 0.0 && ground_share <= 1.0)) {
+    return "ground_share=" + std::to_string(ground_share) + " must be in [0, 1]";
+  }
+  if (!(ground_cell_m > 0.0 && ground_band_m >= 0.0)) {
+    return "ground_cell_m must be > 0 and ground_band_m >= 0";
   }
   if (!(voxel_m >= 0.0 && voxel_m <= 5.0)) {
     return "voxel_m=" + std::to_string(voxel_m) + " must be in [0, 5]";
@@ -52,16 +59,56 @@ FilteredScan filterScan(const PointList& base_points, double roll_rad, double pi
     }
     kept.push_back(q);
   }
-  out.points = options.voxel_m > 0.0 ? voxelDownsample(kept, options.voxel_m) : std::move(kept);
-  if (options.max_points > 0 && out.points.size() > options.max_points) {
-    PointList thinned;
-    thinned.reserve(options.max_points);
-    const double stride = static_cast<double>(out.points.size()) / options.max_points;
-    for (size_t i = 0; i < options.max_points; ++i) {
-      thinned.push_back(out.points[static_cast<size_t>(i * stride)]);
-    }
-    out.points = std::move(thinned);
+  out.voxels = options.voxel_m > 0.0 ? voxelDownsample(kept, options.voxel_m) : std::move(kept);
+  if (options.max_points == 0 || out.voxels.size() <= options.max_points) {
+    out.points = out.voxels;
+    return out;
   }
+  const std::vector<bool> ground =
+      groundMask(out.voxels, options.ground_cell_m, options.ground_band_m);
+  out.ground_voxels = static_cast<size_t>(std::count(ground.begin(), ground.end(), true));
+  out.points = selectSearchPoints(out.voxels, ground, options.max_points, options.ground_share);
+  return out;
+}
+
+std::vector<bool> groundMask(const PointList& pts, double cell_m, double band_m) {
+  std::unordered_map<uint64_t, float> lowest;
+  lowest.reserve(pts.size() / 8 + 16);
+  auto key = [cell_m](const Eigen::Vector3f& p) {
+    const int64_t ix = static_cast<int64_t>(std::floor(p.x() / cell_m)) + (int64_t{1} << 31);
+    const int64_t iy = static_cast<int64_t>(std::floor(p.y() / cell_m)) + (int64_t{1} << 31);
+    return (static_cast<uint64_t>(ix) << 32) ^ static_cast<uint64_t>(iy);
+  };
+  for (const Eigen::Vector3f& p : pts) {
+    auto [it, inserted] = lowest.emplace(key(p), p.z());
+    if (!inserted) it->second = std::min(it->second, p.z());
+  }
+  std::vector<bool> ground(pts.size());
+  for (size_t i = 0; i < pts.size(); ++i) {
+    ground[i] = pts[i].z() <= lowest[key(pts[i])] + static_cast<float>(band_m);
+  }
+  return ground;
+}
+
+PointList selectSearchPoints(const PointList& pts, const std::vector<bool>& ground,
+                             size_t max_points, double ground_share) {
+  PointList g, s;
+  for (size_t i = 0; i < pts.size(); ++i) (ground[i] ? g : s).push_back(pts[i]);
+  // Ground keeps its natural share of the selection, capped at ground_share; when structure
+  // runs short, ground fills the rest.
+  const double natural = static_cast<double>(g.size()) / std::max<size_t>(1, pts.size());
+  const size_t g_want = std::min(
+      g.size(), static_cast<size_t>(std::floor(std::min(natural, ground_share) * max_points)));
+  const size_t n_s = std::min(s.size(), max_points - g_want);
+  const size_t n_g = std::min(g.size(), max_points - n_s);
+  PointList out;
+  out.reserve(n_s + n_g);
+  auto take = [&out](const PointList& from, size_t n) {
+    const double stride = n > 0 ? static_cast<double>(from.size()) / n : 0.0;
+    for (size_t i = 0; i < n; ++i) out.push_back(from[static_cast<size_t>(i * stride)]);
+  };
+  take(s, n_s);
+  take(g, n_g);
   return out;
 }
 

@@ -19,14 +19,24 @@ struct ScanFilterOptions {
   double max_range_m = 80.0;   ///< horizontal distance beyond which returns are dropped [m]
   double min_height_m = -5.0;  ///< height band kept, relative to base_link after levelling [m]
   double max_height_m = 30.0;
-  double voxel_m = 0.2;   ///< voxel edge for downsampling [m]; 0 keeps every point
-  size_t max_points = 0;  ///< keep at most this many (evenly spaced after voxelling); 0 = all
+  double voxel_m = 0.2;  ///< voxel edge for downsampling [m]; 0 keeps every point
+  /// Search points kept after voxelling (0 = all). Ground returns say little about x, y and
+  /// heading, so ground keeps its natural share of them capped at ground_share (1: no bias);
+  /// the rest are above-ground structure (each class evenly thinned). Ground: within ground_band_m of the lowest point of its
+  /// ground_cell_m square in the levelled scan.
+  size_t max_points = 6000;
+  double ground_share = 0.2;
+  double ground_cell_m = 2.0;
+  double ground_band_m = 0.25;
 
   std::string validate() const;
 };
 
 struct FilteredScan {
-  PointList points;  ///< levelled base frame: base_link rotated by roll and pitch (no yaw) [m]
+  PointList points;  ///< search points, levelled base frame: base_link rotated by roll and
+                     ///< pitch (no yaw) [m]
+  PointList voxels;  ///< every voxel centroid (levelled), for the refinement
+  size_t ground_voxels = 0;  ///< voxels classified as ground
   size_t input_points = 0;
   size_t dropped_nonfinite = 0;
   size_t dropped_range = 0;
@@ -37,6 +47,16 @@ struct FilteredScan {
 /// (from the prior / IMU). Never fails: an all-NaN scan returns an empty point list.
 FilteredScan filterScan(const PointList& base_points, double roll_rad, double pitch_rad,
                         const ScanFilterOptions& options);
+
+/// Splits points into ground (within band_m of the lowest point of their cell_m square) and
+/// the rest; returns a flag per point.
+std::vector<bool> groundMask(const PointList& levelled, double cell_m, double band_m);
+
+/// At most max_points of `points`: ground in its natural proportion but at most ground_share
+/// of them (more only when structure runs short), each class evenly thinned in its original
+/// order (deterministic).
+PointList selectSearchPoints(const PointList& points, const std::vector<bool>& ground,
+                             size_t max_points, double ground_share);
 
 /// Centroid of each occupied voxel of edge voxel_m [m], in a deterministic order.
 PointList voxelDownsample(const PointList& points, double voxel_m);

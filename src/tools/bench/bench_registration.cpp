@@ -54,6 +54,7 @@ void usage() {
       "  --heading-step-deg D search heading step (0.5)\n"
       "  --max-points N       search points after voxelling (registration default)\n"
       "  --voxel M            search voxel (registration default)\n"
+      "  --ground-share S     largest share of ground points among search points (default)\n"
       "  --z-period N         raster z coarsening period (raster default)\n"
       "  --no-sizes           skip the scan-size table\n");
 }
@@ -96,6 +97,8 @@ bool parse(int argc, char** argv, Options& o) {
       o.reg.filter.max_points = static_cast<size_t>(std::atoi(v));
     else if (a == "--voxel")
       o.reg.filter.voxel_m = std::atof(v);
+    else if (a == "--ground-share")
+      o.reg.filter.ground_share = std::atof(v);
     else if (a == "--z-period")
       o.raster.z_coarsening_period = std::atoi(v);
     else {
