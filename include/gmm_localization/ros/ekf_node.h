@@ -1,0 +1,101 @@
+#pragma once
+// The ekf nodelet (issue 5, item 4): LocalizationFilter (core Ekf + the shared policy,
+// core/localization_policy_filter.h) fed with the IMU, the INS twist and the matcher's poses;
+// publishes the estimate and the REP-105 map->odom transform at a steady rate.
+//
+// Subscribed (relative names; remap in launch):
+//   imu          sensor_msgs/Imu (any frame with a TF to base_frame; covariance[0] == -1: part
+//                absent; all-zero covariance: configured defaults)
+//   odom         nav_msgs/Odometry from the INS: body twist fused; its pose is the fallback for
+//                odom->base_link when TF has none
+//   pose         geometry_msgs/PoseWithCovarianceStamped, the matcher's matches in map_frame
+//                (delayed measurements, Mahalanobis-gated in the core; the first one starts the
+//                filter when nothing else did)
+//   initialpose  geometry_msgs/PoseWithCovarianceStamped (rviz): (re)starts the filter there,
+//                planar (z, roll, pitch kept from the filter), x/y/yaw variance raised to the
+//                relocalization sigmas so the matcher's wide-window match passes the gate
+// Service:
+//   relocalize   std_srvs/Trigger: inflates x, y, yaw to the relocalization sigmas; the
+//                matcher's next window (3 sigma, clamped) is then its maximum.
+// Published:
+//   odometry     nav_msgs/Odometry in map_frame, child base_frame: stateAt(now) with pose and
+//                twist covariances, at publish_rate_hz, only while the filter runs
+//   TF map->odom = map_T_base(t) * odom_T_base(t)^-1 with t the newest odom->base_link TF,
+//                stamped now, at the same rate
+// Time going backwards (a looping bag) stops the filter until an initial pose or a match;
+// consecutive gate rejections inflate the covariance (see LocalizationFilter). Nothing
+// non-finite is ever published. Callbacks and the timer run serialised on the nodelet's queue.
+
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
+#include <nav_msgs/Odometry.h>
+#include <ros/ros.h>
+#include <sensor_msgs/Imu.h>
+#include <std_srvs/Trigger.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_broadcaster.h>
+#include <tf2_ros/transform_listener.h>
+
+#include "gmm_localization/core/localization_policy_filter.h"
+#include "gmm_localization/core/localization_policy_prior.h"
+#include "gmm_localization/ros/diagnostics.h"
+#include "gmm_localization/ros/ekf_node_options.h"
+
+namespace gmm_localization {
+namespace node {
+
+class EkfNode {
+ public:
+  /// Loads the options (throws ConfigError with the reason), subscribes, starts the timer.
+  EkfNode(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& name);
+  ~EkfNode();
+  EkfNode(const EkfNode&) = delete;
+  EkfNode& operator=(const EkfNode&) = delete;
+
+ private:
+  // ekf_node_callbacks.cpp: inputs and the service.
+  void onImu(const sensor_msgs::Imu::ConstPtr& msg);
+  void onOdom(const nav_msgs::Odometry::ConstPtr& msg);
+  void onMatch(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg);
+  void onInitialPose(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg);
+  bool onRelocalize(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
+  std::optional<Eigen::Quaterniond> imuRotation(const std::string& frame);
+  void handleEvents();  // needs mutex_
+  // ekf_node_publish.cpp: the timer.
+  void onTimer(const ros::TimerEvent& event);
+  std::optional<Eigen::Isometry3d> mapToOdom(const EkfState& now_state);
+  // ekf_node_diagnostics.cpp
+  void setupDiagnostics();
+
+  const std::string name_;
+  ros::NodeHandle nh_, pnh_;
+  EkfNodeOptions options_;
+  std::unique_ptr<LocalizationFilter> filter_;
+  tf2_ros::Buffer tf_buffer_;
+  tf2_ros::TransformListener tf_listener_;
+  tf2_ros::TransformBroadcaster tf_broadcaster_;
+  ros::Subscriber imu_sub_, odom_sub_, match_sub_, initialpose_sub_;
+  ros::ServiceServer relocalize_srv_;
+  ros::Publisher odometry_pub_;
+  ros::Timer timer_;
+  std::unique_ptr<Diagnostics> diagnostics_;
+
+  std::mutex mutex_;  ///< everything below (the diagnostics timer runs on its own queue)
+  std::map<std::string, Eigen::Quaterniond> imu_rotations_;
+  std::optional<OdometrySample> last_odom_;
+  FrequencyMonitor imu_rate_, odom_rate_, match_rate_;
+  ros::WallTime last_imu_wall_, last_odom_wall_, last_match_wall_, last_fused_match_wall_;
+  double last_fused_match_stamp_s_ = NAN;
+  ros::Time last_stamp_;  ///< of the last published estimate
+  uint64_t bad_inputs_ = 0, published_ = 0, publish_failures_ = 0;
+  std::string last_event_;
+  std::string last_publish_problem_;
+};
+
+}  // namespace node
+}  // namespace gmm_localization

@@ -1,0 +1,43 @@
+#pragma once
+// Options of the ekf nodelet, loaded once from its private parameters (config/ekf.yaml
+// documents every key). The EKF core keys are EkfOptions' member names (core/ekf_options.h);
+// the filter policy keys FilterPolicyOptions' (core/localization_policy_filter.h).
+
+#include <string>
+
+#include <ros/ros.h>
+
+#include "gmm_localization/core/localization_policy_filter.h"
+
+namespace gmm_localization {
+namespace node {
+
+struct EkfNodeOptions {
+  std::string map_frame = "map";
+  std::string odom_frame = "odom";
+  std::string base_frame = "base_link";
+  EkfOptions ekf;
+  FilterPolicyOptions filter;
+
+  bool use_imu = true;            ///< subscribe to `imu`
+  bool use_odom_twist = true;     ///< fuse the INS twist of `odom`
+  double publish_rate_hz = 50.0;  ///< odometry and map->odom TF rate (wall or sim time)
+  bool publish_tf = true;
+  /// odom->base_link for map->odom: TF (latest); when TF has none, the newest `odom` message
+  /// pose if within this age of the filter time [s].
+  double odom_pose_max_age_s = 0.5;
+  /// Diagnostics: an input silent for longer than this is a dropout (WARN) [s].
+  double imu_timeout_s = 0.5;
+  double odom_timeout_s = 0.5;
+  double match_timeout_s = 3.0;
+};
+
+/// Throws ConfigError naming the key, value and range.
+EkfNodeOptions loadEkfNodeOptions(const ros::NodeHandle& pnh);
+/// EkfOptions from keys named after its members (lists of 15 for the per-state arrays).
+EkfOptions loadEkfOptions(const ros::NodeHandle& nh);
+/// FilterPolicyOptions (keys under `policy/`).
+FilterPolicyOptions loadFilterPolicyOptions(const ros::NodeHandle& nh);
+
+}  // namespace node
+}  // namespace gmm_localization

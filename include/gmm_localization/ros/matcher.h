@@ -1,0 +1,128 @@
+#pragma once
+// The matcher (issue 5, item 3): registers each merged scan in the rasterized map (paper
+// Algorithm 1: branch-and-bound search + hill climb) around a prior and publishes the pose with
+// the search-space covariance. The per-scan logic is the ROS-free MatchProcessor + PriorTracker
+// (core/localizer_pipeline_match.h, core/localization_policy_prior.h), shared with
+// LocalizerPipeline, so `evaluate` reproduces what this node does.
+//
+// Subscribed (relative names; remap in launch):
+//   velodyne_points  sensor_msgs/PointCloud2, merged scan in base_frame (another frame is moved
+//                    into base_frame with TF at the scan stamp, rigidly); per-point `time`
+//                    deskews it with the INS twist
+//   odom             nav_msgs/Odometry, INS (odom -> base_link): twist for deskewing, poses to
+//                    carry the EKF posterior to the scan stamp
+//   odometry         nav_msgs/Odometry, the EKF posterior (map frame) = the tracking prior
+//   initialpose      geometry_msgs/PoseWithCovarianceStamped (rviz "2D Pose Estimate"; z, roll,
+//                    pitch completed from the posterior/INS): wide window around it
+//   map_chunks       gmm_localization/RasterChunk (zero copy via node::fromMsg)
+//   map_index        gmm_localization/MapIndex (latched): protocol of map_server_client.h
+// Published:
+//   pose             geometry_msgs/PoseWithCovarianceStamped, accepted matches, scan stamp, map
+//   status           gmm_localization/MatchStatus, one per processed scan (accepted or why not)
+//                    plus one when time went backwards
+//   obstacles        sensor_msgs/PointCloud2 of obstacle points (obstacles_frame)  [on demand]
+//   scan_classified  sensor_msgs/PointCloud2, scan in map with mahalanobis + class [on demand]
+//   search_traversal sensor_msgs/Image, the branch-and-bound traversal (Fig. 9)   [on demand]
+// Threads: ROS callbacks (serialised, non-blocking) and one worker that takes only the newest
+// scan: a scan still waiting when a newer one arrives is dropped and counted in the next status.
+// The worker searches a snapshot of the map (immutable shared chunks): chunk callbacks never
+// wait for a match.
+
+#include <atomic>
+#include <condition_variable>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
+#include <nav_msgs/Odometry.h>
+#include <ros/ros.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
+
+#include "gmm_localization/MapIndex.h"
+#include "gmm_localization/RasterChunk.h"
+#include "gmm_localization/core/localizer_pipeline.h"
+#include "gmm_localization/ros/diagnostics.h"
+#include "gmm_localization/ros/map_server_client.h"
+#include "gmm_localization/ros/matcher_options.h"
+
+namespace gmm_localization {
+namespace node {
+
+class Matcher {
+ public:
+  /// Loads the options (throws ConfigError with the reason), subscribes and starts the worker.
+  Matcher(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& name);
+  ~Matcher();
+  Matcher(const Matcher&) = delete;
+  Matcher& operator=(const Matcher&) = delete;
+
+ private:
+  // matcher_inputs.cpp: INS, posterior, initial pose, map.
+  void onOdom(const nav_msgs::Odometry::ConstPtr& msg);
+  void onPosterior(const nav_msgs::Odometry::ConstPtr& msg);
+  void onInitialPose(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg);
+  void onChunk(const RasterChunk::ConstPtr& msg);
+  void onIndex(const MapIndex::ConstPtr& msg);
+  void armConfiguredPose();  // needs state_mutex_
+  // matcher_worker.cpp: scan intake, the worker, one scan's processing.
+  void onScan(const sensor_msgs::PointCloud2::ConstPtr& msg);
+  void workerLoop();
+  void processScan(const sensor_msgs::PointCloud2::ConstPtr& msg, uint32_t dropped);
+  bool scanToBase(const sensor_msgs::PointCloud2& msg, ScanInput* scan, std::string* reason);
+  void publishSkipped(const ros::Time& stamp, const std::string& reason, uint32_t dropped);
+  void publishOutputs(const MatchReport& report, const ros::Time& stamp, uint32_t dropped);
+  // matcher_diagnostics.cpp
+  void setupDiagnostics();
+  void record(const MatchReport& report, uint32_t dropped);
+
+  const std::string name_;
+  ros::NodeHandle nh_, pnh_;
+  MatcherOptions options_;
+  std::unique_ptr<MatchProcessor> processor_;
+  tf2_ros::Buffer tf_buffer_;
+  tf2_ros::TransformListener tf_listener_;
+
+  ros::Subscriber scan_sub_, odom_sub_, posterior_sub_, initialpose_sub_, chunk_sub_, index_sub_;
+  ros::Publisher pose_pub_, status_pub_, obstacles_pub_, classified_pub_, traversal_pub_;
+  std::unique_ptr<Diagnostics> diagnostics_;
+
+  // Localization state, shared by the callbacks and the worker.
+  std::mutex state_mutex_;
+  PriorTracker tracker_;
+  OdometryBuffer odometry_;
+  bool have_last_scan_ = false;
+  double last_scan_stamp_s_ = 0.0;
+  uint64_t epoch_ = 0;  ///< incremented when time goes backwards: older results are discarded
+
+  // The map: protocol state and the snapshot the worker searches.
+  std::mutex map_mutex_;
+  MapServerClient map_client_;
+  std::shared_ptr<const ChunkMap> map_snapshot_;
+
+  // The single-slot scan queue and the worker.
+  std::mutex queue_mutex_;
+  std::condition_variable queue_cv_;
+  sensor_msgs::PointCloud2::ConstPtr waiting_;
+  uint32_t dropped_since_status_ = 0;
+  bool stop_ = false;
+  std::thread worker_;
+
+  // Diagnostics (stats_mutex_).
+  std::mutex stats_mutex_;
+  FrequencyMonitor scan_rate_, match_rate_;
+  std::deque<bool> recent_accepted_;
+  uint64_t scans_ = 0, accepted_ = 0, dropped_total_ = 0, time_resets_ = 0, bad_clouds_ = 0;
+  std::string last_reason_;
+  double last_ll_per_point_ = 0.0, last_search_ms_ = 0.0, last_total_ms_ = 0.0;
+  WindowExtent last_window_;
+  std::string last_prior_source_ = "none";
+  std::string last_mode_ = "no_prior";
+};
+
+}  // namespace node
+}  // namespace gmm_localization

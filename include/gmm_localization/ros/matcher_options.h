@@ -1,0 +1,63 @@
+#pragma once
+// Options of the matcher nodelet, loaded once from its private parameters (config/matcher.yaml
+// documents every key). The registration and policy loaders are public so that other tools
+// (e.g. `evaluate` with a parameter server) read the same keys.
+
+#include <string>
+
+#include <ros/ros.h>
+
+#include "gmm_localization/core/localization_policy.h"
+#include "gmm_localization/core/localizer_pipeline.h"
+#include "gmm_localization/core/localizer_pipeline_traversal.h"
+#include "gmm_localization/core/registration.h"
+#include "gmm_localization/ros/ekf_node_options.h"
+
+namespace gmm_localization {
+namespace node {
+
+struct MatcherOptions {
+  std::string map_frame = "map";
+  std::string base_frame = "base_link";
+  RegistrationOptions registration;
+  LocalizationPolicyOptions policy;
+
+  bool deskew = true;                   ///< motion-compensate scans with the INS twist
+  double deskew_twist_max_gap_s = 0.2;  ///< INS sample within this of mid-scan [s]
+  double odometry_buffer_s = 10.0;      ///< INS history kept [s]
+  double odometry_max_extrapolation_s = 0.3;
+  double time_backwards_tolerance_s = 1.0;  ///< scan stamp regression that clears the state [s]
+
+  /// Configured initial pose (unattended start): searched with its window at the first scan.
+  bool initial_pose_enabled = false;
+  Pose6 initial_pose;  ///< x, y, z [m], yaw [rad] (roll, pitch 0)
+  bool initial_pose_z_known = true;
+  double initial_pose_half_xy_m = 12.5;           ///< its window [m]
+  double initial_pose_half_heading_rad = 0.2618;  ///< [rad]
+  bool configured_pose_on_reset = true;           ///< search it again after time went backwards
+
+  std::string obstacles_frame = "base_link";  ///< base_frame or map_frame
+  double classified_max_mahalanobis = 10.0;   ///< clamp of the `mahalanobis` field
+  TraversalImageOptions traversal;
+
+  double expected_scan_rate_hz = 10.0;  ///< diagnostics: scans below half this rate warn
+  double min_accepted_share = 0.5;      ///< diagnostics: warn below this share (last 50)
+};
+
+/// Throws ConfigError naming the key, value and range.
+MatcherOptions loadMatcherOptions(const ros::NodeHandle& pnh);
+/// Keys under `registration/` (filter, search, hill climb, covariance, obstacles).
+RegistrationOptions loadRegistrationOptions(const ros::NodeHandle& nh);
+/// Keys under `window/`, `acceptance/`, `covariance/`, `relocalization/`.
+LocalizationPolicyOptions loadLocalizationPolicyOptions(const ros::NodeHandle& nh);
+
+/// The LocalizerPipeline options equivalent to a matcher + ekf nodelet pair with these options
+/// (for `evaluate`: load both with the loaders above from the same YAML files). The configured
+/// initial pose is not included: call LocalizerPipeline::setConfiguredPose with
+/// configuredPoseWindow() when matcher.initial_pose_enabled.
+LocalizerPipelineOptions pipelineOptions(const MatcherOptions& matcher, const EkfNodeOptions& ekf);
+/// The configured initial pose's own window.
+WindowExtent configuredPoseWindow(const MatcherOptions& matcher);
+
+}  // namespace node
+}  // namespace gmm_localization

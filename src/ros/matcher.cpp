@@ -1,0 +1,66 @@
+// Matcher set-up and tear-down (see matcher.h).
+#include "gmm_localization/ros/matcher.h"
+
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
+#include <sensor_msgs/Image.h>
+
+#include "gmm_localization/MatchStatus.h"
+#include "gmm_localization/ros/params.h"
+
+namespace gmm_localization {
+namespace node {
+
+Matcher::Matcher(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& name)
+    : name_(name),
+      nh_(nh),
+      pnh_(pnh),
+      options_(loadMatcherOptions(pnh)),
+      tf_listener_(tf_buffer_),
+      tracker_(options_.policy),
+      odometry_(options_.odometry_buffer_s, options_.odometry_max_extrapolation_s,
+                options_.time_backwards_tolerance_s),
+      scan_rate_(0.5 * options_.expected_scan_rate_hz, 2.0 * options_.expected_scan_rate_hz),
+      match_rate_(0.0, 1e9) {
+  auto processor = MatchProcessor::create(options_.registration, options_.policy);
+  if (!processor) throw ConfigError(processor.error());
+  processor_ = std::make_unique<MatchProcessor>(std::move(processor).value());
+  armConfiguredPose();
+
+  pose_pub_ = nh_.advertise<geometry_msgs::PoseWithCovarianceStamped>("pose", 10);
+  status_pub_ = nh_.advertise<MatchStatus>("status", 10);
+  obstacles_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("obstacles", 1);
+  classified_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("scan_classified", 1);
+  traversal_pub_ = nh_.advertise<sensor_msgs::Image>("search_traversal", 1);
+
+  const ros::TransportHints hints = ros::TransportHints().tcpNoDelay();
+  scan_sub_ = nh_.subscribe("velodyne_points", 2, &Matcher::onScan, this, hints);
+  odom_sub_ = nh_.subscribe("odom", 200, &Matcher::onOdom, this, hints);
+  posterior_sub_ = nh_.subscribe("odometry", 20, &Matcher::onPosterior, this, hints);
+  initialpose_sub_ = nh_.subscribe("initialpose", 2, &Matcher::onInitialPose, this);
+  chunk_sub_ = nh_.subscribe("map_chunks", 512, &Matcher::onChunk, this);
+  index_sub_ = nh_.subscribe("map_index", 8, &Matcher::onIndex, this);
+
+  setupDiagnostics();
+  worker_ = std::thread([this] { workerLoop(); });
+  ROS_INFO("%s: matching scans in frame '%s' against map '%s'%s", name_.c_str(),
+           options_.base_frame.c_str(), options_.map_frame.c_str(),
+           options_.initial_pose_enabled ? " from the configured initial pose" : "");
+}
+
+Matcher::~Matcher() {
+  // No callback or diagnostics task may run while the members go away.
+  for (ros::Subscriber* sub :
+       {&scan_sub_, &odom_sub_, &posterior_sub_, &initialpose_sub_, &chunk_sub_, &index_sub_}) {
+    sub->shutdown();
+  }
+  diagnostics_.reset();
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    stop_ = true;
+  }
+  queue_cv_.notify_all();
+  if (worker_.joinable()) worker_.join();
+}
+
+}  // namespace node
+}  // namespace gmm_localization

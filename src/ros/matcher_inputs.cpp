@@ -1,0 +1,117 @@
+// Matcher inputs other than scans: INS odometry, EKF posterior, initial pose, map (matcher.h).
+#include <cmath>
+
+#include <tf2_eigen/tf2_eigen.h>
+
+#include "gmm_localization/core/exact_scorer.h"
+#include "gmm_localization/ros/ekf_node_conversions.h"
+#include "gmm_localization/ros/matcher.h"
+#include "gmm_localization/ros/pose_conversion.h"
+
+namespace gmm_localization {
+namespace node {
+
+void Matcher::armConfiguredPose() {
+  if (!options_.initial_pose_enabled) return;
+  const WindowExtent window = configuredPoseWindow(options_);
+  tracker_.setExplicitPose(options_.initial_pose, NAN, PriorSource::kConfigured,
+                           options_.initial_pose_z_known, &window);
+}
+
+void Matcher::onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
+  if (!msg->child_frame_id.empty() && msg->child_frame_id != options_.base_frame) {
+    ROS_WARN_THROTTLE(10.0,
+                      "%s: INS odometry child frame '%s' is not '%s'; its twist is used "
+                      "as if it were",
+                      name_.c_str(), msg->child_frame_id.c_str(), options_.base_frame.c_str());
+  }
+  const OdometrySample sample = odometrySampleFromMsg(*msg);
+  OdometryBuffer::AddResult r;
+  {
+    std::lock_guard<std::mutex> lock(state_mutex_);
+    r = odometry_.add(sample);
+  }
+  if (r == OdometryBuffer::AddResult::kTimeWentBackwards) {
+    ROS_WARN_THROTTLE(2.0, "%s: INS odometry went back in time: its buffer restarted",
+                      name_.c_str());
+  } else if (r == OdometryBuffer::AddResult::kDroppedOutOfOrder) {
+    ROS_WARN_THROTTLE(10.0, "%s: INS odometry sample out of order or not finite: ignored",
+                      name_.c_str());
+  }
+}
+
+void Matcher::onPosterior(const nav_msgs::Odometry::ConstPtr& msg) {
+  if (msg->header.frame_id != options_.map_frame) {
+    ROS_WARN_THROTTLE(10.0, "%s: EKF odometry in frame '%s', expected '%s': ignored", name_.c_str(),
+                      msg->header.frame_id.c_str(), options_.map_frame.c_str());
+    return;
+  }
+  std::lock_guard<std::mutex> lock(state_mutex_);
+  tracker_.setPosterior(posteriorFromOdometryMsg(*msg));  // ignores non-finite estimates
+}
+
+void Matcher::onInitialPose(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg) {
+  geometry_msgs::PoseWithCovarianceStamped in_map = *msg;
+  if (msg->header.frame_id != options_.map_frame) {
+    try {
+      const auto t = tf_buffer_.lookupTransform(options_.map_frame, msg->header.frame_id,
+                                                ros::Time(0), ros::Duration(0.1));
+      const Eigen::Isometry3d map_T_frame = tf2::transformToEigen(t);
+      const Eigen::Isometry3d pose = map_T_frame * fromPoseMsg(msg->pose.pose);
+      in_map.pose.pose = toPoseMsg(pose);
+    } catch (const tf2::TransformException& e) {
+      ROS_WARN("%s: initial pose in frame '%s' ignored: %s", name_.c_str(),
+               msg->header.frame_id.c_str(), e.what());
+      return;
+    }
+  }
+  const auto pose = poseFromMsg(in_map);
+  if (!pose) {
+    ROS_WARN("%s: initial pose ignored: %s", name_.c_str(), pose.error().c_str());
+    return;
+  }
+  // rviz's "2D Pose Estimate" gives x, y, yaw (z = 0): complete z, roll, pitch.
+  const double stamp = msg->header.stamp.isZero() ? NAN : pose->stamp_s;
+  bool z_known = false;
+  Pose6 full;
+  {
+    std::lock_guard<std::mutex> lock(state_mutex_);
+    full = tracker_.completePlanarPose(pose->pose, &odometry_, &z_known);
+    tracker_.setExplicitPose(full, stamp, PriorSource::kInitialPose, z_known);
+  }
+  ROS_INFO("%s: initial pose x %.2f y %.2f yaw %.3f (z %.2f %s): searching the wide window",
+           name_.c_str(), full.x, full.y, full.yaw, full.z,
+           z_known ? "from the posterior" : "unknown");
+}
+
+void Matcher::onChunk(const RasterChunk::ConstPtr& msg) {
+  std::string error;
+  std::lock_guard<std::mutex> lock(map_mutex_);
+  const auto verdict = map_client_.onChunk(msg, &error);
+  if (verdict == MapServerClient::ChunkVerdict::kInvalid) {
+    ROS_WARN_THROTTLE(5.0, "%s: chunk (%d, %d) rejected: %s", name_.c_str(), msg->chunk_x,
+                      msg->chunk_y, error.c_str());
+    return;
+  }
+  if (verdict == MapServerClient::ChunkVerdict::kAdded && map_client_.hasIndex()) {
+    // Copy-on-write: the worker keeps searching its own snapshot (chunks are shared).
+    map_snapshot_ = std::make_shared<const ChunkMap>(map_client_.chunks());
+  }
+}
+
+void Matcher::onIndex(const MapIndex::ConstPtr& msg) {
+  std::lock_guard<std::mutex> lock(map_mutex_);
+  const uint64_t previous = map_client_.mapVersion();
+  const size_t dropped = map_client_.onIndex(msg);
+  if (map_client_.mapVersion() != previous) {
+    ROS_INFO("%s: map version %lu ('%s'), %zu chunks listed", name_.c_str(),
+             static_cast<unsigned long>(map_client_.mapVersion()), msg->map_directory.c_str(),
+             msg->chunk_x.size());
+  } else if (dropped > 0) {
+    ROS_DEBUG("%s: %zu chunks evicted by the map index", name_.c_str(), dropped);
+  }
+  map_snapshot_ = std::make_shared<const ChunkMap>(map_client_.chunks());
+}
+
+}  // namespace node
+}  // namespace gmm_localization

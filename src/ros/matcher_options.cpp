@@ -1,0 +1,173 @@
+#include "gmm_localization/ros/matcher_options.h"
+
+#include "gmm_localization/ros/params.h"
+
+namespace gmm_localization {
+namespace node {
+namespace {
+
+constexpr double kBig = 1e9;
+
+}  // namespace
+
+RegistrationOptions loadRegistrationOptions(const ros::NodeHandle& parent) {
+  const ros::NodeHandle nh(parent, "registration");
+  RegistrationOptions o;
+  ScanFilterOptions& f = o.filter;
+  f.min_range_m = param(nh, "filter/min_range_m", f.min_range_m, 0.0, 1000.0);
+  f.max_range_m = param(nh, "filter/max_range_m", f.max_range_m, 0.0, 1000.0);
+  f.min_height_m = param(nh, "filter/min_height_m", f.min_height_m, -1000.0, 1000.0);
+  f.max_height_m = param(nh, "filter/max_height_m", f.max_height_m, -1000.0, 1000.0);
+  f.voxel_m = param(nh, "filter/voxel_m", f.voxel_m, 0.0, 10.0);
+  f.max_points = static_cast<size_t>(
+      param(nh, "filter/max_points", static_cast<int>(f.max_points), 0, 100000000));
+  f.ground_share = param(nh, "filter/ground_share", f.ground_share, 0.0, 1.0);
+  f.ground_cell_m = param(nh, "filter/ground_cell_m", f.ground_cell_m, 0.1, 100.0);
+  f.ground_band_m = param(nh, "filter/ground_band_m", f.ground_band_m, 0.0, 10.0);
+  o.refine_max_points = static_cast<size_t>(
+      param(nh, "refine_max_points", static_cast<int>(o.refine_max_points), 10, 10000000));
+  o.heading_step_rad = param(nh, "heading_step_rad", o.heading_step_rad, 1e-4, 0.2);
+  o.z_search_m = param(nh, "z_search_m", o.z_search_m, 0.0, 20.0);
+  o.exhaustive = param(nh, "exhaustive", o.exhaustive);
+  o.branch_and_bound.prior_as_incumbent =
+      param(nh, "prior_as_incumbent", o.branch_and_bound.prior_as_incumbent);
+  HillClimbOptions& h = o.hill_climb;
+  h.max_xy_m = param(nh, "hill_climb/max_xy_m", h.max_xy_m, 0.0, 10.0);
+  h.max_yaw_rad = param(nh, "hill_climb/max_yaw_rad", h.max_yaw_rad, 0.0, 1.0);
+  h.max_z_m = param(nh, "hill_climb/max_z_m", h.max_z_m, 0.0, 10.0);
+  h.max_roll_pitch_rad = param(nh, "hill_climb/max_roll_pitch_rad", h.max_roll_pitch_rad, 0.0, 1.0);
+  h.max_evaluations = param(nh, "hill_climb/max_evaluations", h.max_evaluations, 1, 100000);
+  CovarianceOptions& c = o.covariance;
+  c.radius_m = param(nh, "covariance/radius_m", c.radius_m, 0.01, 100.0);
+  c.heading_radius = param(nh, "covariance/heading_radius", c.heading_radius, 0, 1000);
+  c.temperature_per_point =
+      param(nh, "covariance/temperature_per_point", c.temperature_per_point, 1e-6, 100.0);
+  c.min_sigma_xy_m = param(nh, "covariance/min_sigma_xy_m", c.min_sigma_xy_m, 1e-6, 100.0);
+  c.min_sigma_yaw_rad = param(nh, "covariance/min_sigma_yaw_rad", c.min_sigma_yaw_rad, 1e-7, 3.2);
+  c.edge_mass_limit = param(nh, "covariance/edge_mass_limit", c.edge_mass_limit, 1e-6, 1.0);
+  o.classify_obstacles = param(nh, "classify_obstacles", o.classify_obstacles);
+  o.obstacles.mahalanobis_threshold =
+      param(nh, "obstacles/mahalanobis_threshold", o.obstacles.mahalanobis_threshold, 0.0, 1000.0);
+  o.min_map_coverage = param(nh, "min_map_coverage", o.min_map_coverage, 0.0, 1.0);
+  requireValid("registration options", o.validate());
+  return o;
+}
+
+LocalizationPolicyOptions loadLocalizationPolicyOptions(const ros::NodeHandle& nh) {
+  LocalizationPolicyOptions o;
+  WindowPolicyOptions& w = o.window;
+  w.sigma_multiplier = param(nh, "window/sigma_multiplier", w.sigma_multiplier, 0.5, 10.0);
+  w.min_half_xy_m = param(nh, "window/min_half_xy_m", w.min_half_xy_m, 0.2, 100.0);
+  w.max_half_xy_m = param(nh, "window/max_half_xy_m", w.max_half_xy_m, 0.2, 100.0);
+  w.min_half_heading_rad =
+      param(nh, "window/min_half_heading_rad", w.min_half_heading_rad, 0.0, 1.6);
+  w.max_half_heading_rad =
+      param(nh, "window/max_half_heading_rad", w.max_half_heading_rad, 0.0, 1.6);
+  w.wide_half_xy_m = param(nh, "window/wide_half_xy_m", w.wide_half_xy_m, 0.2, 100.0);
+  w.wide_half_heading_rad =
+      param(nh, "window/wide_half_heading_rad", w.wide_half_heading_rad, 0.0, 1.6);
+  w.unknown_z_search_m = param(nh, "window/unknown_z_search_m", w.unknown_z_search_m, 0.0, 20.0);
+  AcceptancePolicyOptions& a = o.acceptance;
+  a.min_log_likelihood_per_point = param(nh, "acceptance/min_log_likelihood_per_point",
+                                         a.min_log_likelihood_per_point, -100.0, 10.0);
+  a.min_map_coverage = param(nh, "acceptance/min_map_coverage", a.min_map_coverage, 0.0, 1.0);
+  a.max_sigma_xy_m = param(nh, "acceptance/max_sigma_xy_m", a.max_sigma_xy_m, 0.0, 1000.0);
+  a.max_sigma_yaw_rad = param(nh, "acceptance/max_sigma_yaw_rad", a.max_sigma_yaw_rad, 0.0, 10.0);
+  a.reject_on_window_edge = param(nh, "acceptance/reject_on_window_edge", a.reject_on_window_edge);
+  PoseCovariancePolicyOptions& c = o.covariance;
+  c.use_search_covariance = param(nh, "covariance/use_search_covariance", c.use_search_covariance);
+  c.search_covariance_scale =
+      param(nh, "covariance/search_covariance_scale", c.search_covariance_scale, 1e-3, 1e3);
+  c.fixed_sigma_xy_m = param(nh, "covariance/fixed_sigma_xy_m", c.fixed_sigma_xy_m, 1e-4, 100.0);
+  c.fixed_sigma_yaw_rad =
+      param(nh, "covariance/fixed_sigma_yaw_rad", c.fixed_sigma_yaw_rad, 1e-5, 3.2);
+  c.min_sigma_xy_m = param(nh, "covariance/min_sigma_xy_m", c.min_sigma_xy_m, 1e-4, 100.0);
+  c.min_sigma_yaw_rad = param(nh, "covariance/min_sigma_yaw_rad", c.min_sigma_yaw_rad, 1e-5, 3.2);
+  c.sigma_z_m = param(nh, "covariance/sigma_z_m", c.sigma_z_m, 1e-4, 100.0);
+  c.sigma_roll_pitch_rad =
+      param(nh, "covariance/sigma_roll_pitch_rad", c.sigma_roll_pitch_rad, 1e-5, 3.2);
+  RelocalizationPolicyOptions& r = o.relocalization;
+  r.max_consecutive_rejections = param(nh, "relocalization/max_consecutive_rejections",
+                                       r.max_consecutive_rejections, 1, 1000000);
+  r.max_posterior_age_s =
+      param(nh, "relocalization/max_posterior_age_s", r.max_posterior_age_s, 0.0, 60.0);
+  r.max_previous_match_age_s =
+      param(nh, "relocalization/max_previous_match_age_s", r.max_previous_match_age_s, 0.0, 600.0);
+  r.previous_match_sigma_growth_mps = param(nh, "relocalization/previous_match_sigma_growth_mps",
+                                            r.previous_match_sigma_growth_mps, 0.0, 100.0);
+  r.max_stale_prior_age_s =
+      param(nh, "relocalization/max_stale_prior_age_s", r.max_stale_prior_age_s, 0.0, 1e6);
+  requireValid("localization policy options", o.validate());
+  return o;
+}
+
+MatcherOptions loadMatcherOptions(const ros::NodeHandle& pnh) {
+  MatcherOptions o;
+  o.map_frame = param<std::string>(pnh, "map_frame", o.map_frame);
+  o.base_frame = param<std::string>(pnh, "base_frame", o.base_frame);
+  if (o.map_frame.empty() || o.base_frame.empty()) {
+    throw ConfigError("parameters map_frame and base_frame must not be empty");
+  }
+  o.registration = loadRegistrationOptions(pnh);
+  o.policy = loadLocalizationPolicyOptions(pnh);
+  o.deskew = param(pnh, "deskew", o.deskew);
+  o.deskew_twist_max_gap_s =
+      param(pnh, "deskew_twist_max_gap_s", o.deskew_twist_max_gap_s, 0.0, 10.0);
+  o.odometry_buffer_s = param(pnh, "odometry_buffer_s", o.odometry_buffer_s, 0.1, 3600.0);
+  o.odometry_max_extrapolation_s =
+      param(pnh, "odometry_max_extrapolation_s", o.odometry_max_extrapolation_s, 0.0, 10.0);
+  o.time_backwards_tolerance_s =
+      param(pnh, "time_backwards_tolerance_s", o.time_backwards_tolerance_s, 0.0, kBig);
+
+  o.initial_pose_enabled = param(pnh, "initial_pose/enabled", o.initial_pose_enabled);
+  o.initial_pose.x = param(pnh, "initial_pose/x", o.initial_pose.x, -kBig, kBig);
+  o.initial_pose.y = param(pnh, "initial_pose/y", o.initial_pose.y, -kBig, kBig);
+  o.initial_pose.z = param(pnh, "initial_pose/z", o.initial_pose.z, -kBig, kBig);
+  o.initial_pose.yaw = param(pnh, "initial_pose/yaw", o.initial_pose.yaw, -10.0, 10.0);
+  o.initial_pose_z_known = param(pnh, "initial_pose/z_known", o.initial_pose_z_known);
+  o.initial_pose_half_xy_m =
+      param(pnh, "initial_pose/window_half_xy_m", o.initial_pose_half_xy_m, 0.2, 100.0);
+  o.initial_pose_half_heading_rad =
+      param(pnh, "initial_pose/window_half_heading_rad", o.initial_pose_half_heading_rad, 0.0, 3.2);
+  o.configured_pose_on_reset = param(pnh, "initial_pose/on_reset", o.configured_pose_on_reset);
+
+  o.obstacles_frame = param<std::string>(pnh, "obstacles_frame", o.obstacles_frame);
+  if (o.obstacles_frame != o.base_frame && o.obstacles_frame != o.map_frame) {
+    throw ConfigError("parameter " + pnh.resolveName("obstacles_frame") + " = '" +
+                      o.obstacles_frame + "' must be base_frame ('" + o.base_frame +
+                      "') or map_frame ('" + o.map_frame + "')");
+  }
+  o.classified_max_mahalanobis =
+      param(pnh, "classified_max_mahalanobis", o.classified_max_mahalanobis, 0.1, 1e6);
+  o.traversal.max_width_px =
+      param(pnh, "traversal/max_width_px", o.traversal.max_width_px, 16, 16384);
+  o.traversal.max_tile_px = param(pnh, "traversal/max_tile_px", o.traversal.max_tile_px, 4, 4096);
+  o.traversal.gap_px = param(pnh, "traversal/gap_px", o.traversal.gap_px, 0, 64);
+  o.expected_scan_rate_hz =
+      param(pnh, "expected_scan_rate_hz", o.expected_scan_rate_hz, 0.01, 1000.0);
+  o.min_accepted_share = param(pnh, "min_accepted_share", o.min_accepted_share, 0.0, 1.0);
+  return o;
+}
+
+LocalizerPipelineOptions pipelineOptions(const MatcherOptions& m, const EkfNodeOptions& e) {
+  LocalizerPipelineOptions o;
+  o.ekf = e.ekf;
+  o.filter = e.filter;
+  o.registration = m.registration;
+  o.policy = m.policy;
+  o.odometry_buffer_s = m.odometry_buffer_s;
+  o.odometry_max_extrapolation_s = m.odometry_max_extrapolation_s;
+  o.deskew = m.deskew;
+  o.deskew_twist_max_gap_s = m.deskew_twist_max_gap_s;
+  o.time_backwards_tolerance_s = m.time_backwards_tolerance_s;
+  o.configured_pose_on_reset = m.configured_pose_on_reset;
+  return o;
+}
+
+WindowExtent configuredPoseWindow(const MatcherOptions& m) {
+  return WindowExtent{m.initial_pose_half_xy_m, m.initial_pose_half_xy_m,
+                      m.initial_pose_half_heading_rad};
+}
+
+}  // namespace node
+}  // namespace gmm_localization

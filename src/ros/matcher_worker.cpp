@@ -1,0 +1,229 @@
+// Matcher scan path: the single-slot intake, the worker thread and one scan's processing and
+// publication (matcher.h).
+#include <cmath>
+#include <cstdio>
+
+#include <tf2_eigen/tf2_eigen.h>
+
+#include "gmm_localization/MatchStatus.h"
+#include "gmm_localization/ros/cloud_conversion.h"
+#include "gmm_localization/ros/matcher.h"
+#include "gmm_localization/ros/matcher_outputs.h"
+
+namespace gmm_localization {
+namespace node {
+
+void Matcher::onScan(const sensor_msgs::PointCloud2::ConstPtr& msg) {
+  scan_rate_.tick();
+  // Time going backwards (a looping bag): forget the state of the other timeline.
+  const double stamp = msg->header.stamp.toSec();
+  double jump = 0.0;
+  {
+    std::lock_guard<std::mutex> lock(state_mutex_);
+    if (have_last_scan_ && stamp < last_scan_stamp_s_ - options_.time_backwards_tolerance_s) {
+      jump = last_scan_stamp_s_ - stamp;
+      tracker_.reset();
+      ++epoch_;
+      if (options_.configured_pose_on_reset) armConfiguredPose();
+    }
+    have_last_scan_ = true;
+    last_scan_stamp_s_ = stamp;
+  }
+  if (jump > 0.0) {
+    {
+      std::lock_guard<std::mutex> lock(stats_mutex_);
+      ++time_resets_;
+    }
+    char reason[160];
+    std::snprintf(reason, sizeof(reason),
+                  "time went backwards by %.3f s: matcher state cleared, waiting for a prior",
+                  jump);
+    ROS_WARN("%s: %s", name_.c_str(), reason);
+    publishSkipped(msg->header.stamp, reason, 0);
+  }
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    if (waiting_) {
+      ++dropped_since_status_;
+      std::lock_guard<std::mutex> stats(stats_mutex_);
+      ++dropped_total_;
+    }
+    waiting_ = msg;
+  }
+  queue_cv_.notify_one();
+}
+
+void Matcher::workerLoop() {
+  while (true) {
+    sensor_msgs::PointCloud2::ConstPtr msg;
+    uint32_t dropped = 0;
+    {
+      std::unique_lock<std::mutex> lock(queue_mutex_);
+      queue_cv_.wait(lock, [this] { return stop_ || waiting_ != nullptr; });
+      if (stop_) return;
+      msg = std::move(waiting_);
+      waiting_.reset();
+      dropped = dropped_since_status_;
+      dropped_since_status_ = 0;
+    }
+    try {
+      processScan(msg, dropped);
+    } catch (const std::exception& e) {
+      ROS_ERROR_THROTTLE(5.0, "%s: scan processing failed: %s", name_.c_str(), e.what());
+    }
+  }
+}
+
+bool Matcher::scanToBase(const sensor_msgs::PointCloud2& msg, ScanInput* scan,
+                         std::string* reason) {
+  auto cloud = fromCloudMsg(msg);
+  if (!cloud) {
+    *reason = "malformed cloud: " + cloud.error();
+    return false;
+  }
+  if (cloud->points.empty()) {
+    *reason = "empty cloud (0 points)";
+    return false;
+  }
+  if (msg.header.stamp.isZero()) {
+    *reason = "cloud stamp is zero";
+    return false;
+  }
+  scan->stamp_s = msg.header.stamp.toSec();
+  scan->points = std::move(cloud->points);
+  scan->time_s = std::move(cloud->time_s);
+  if (!msg.header.frame_id.empty() && msg.header.frame_id != options_.base_frame) {
+    try {
+      const auto t = tf_buffer_.lookupTransform(options_.base_frame, msg.header.frame_id,
+                                                msg.header.stamp, ros::Duration(0.05));
+      const Eigen::Isometry3f base_T_cloud = tf2::transformToEigen(t).cast<float>();
+      for (Eigen::Vector3f& p : scan->points) p = base_T_cloud * p;
+    } catch (const tf2::TransformException& e) {
+      *reason = "no transform from the cloud frame '" + msg.header.frame_id + "' to '" +
+                options_.base_frame + "': " + e.what();
+      return false;
+    }
+  }
+  return true;
+}
+
+void Matcher::processScan(const sensor_msgs::PointCloud2::ConstPtr& msg, uint32_t dropped) {
+  ScanInput scan;
+  std::string reason;
+  if (!scanToBase(*msg, &scan, &reason)) {
+    {
+      std::lock_guard<std::mutex> lock(stats_mutex_);
+      ++bad_clouds_;
+    }
+    ROS_WARN_THROTTLE(5.0, "%s: scan skipped: %s", name_.c_str(), reason.c_str());
+    publishSkipped(msg->header.stamp, reason, dropped);
+    return;
+  }
+  Prior prior;
+  std::optional<BodyTwist> twist;
+  uint64_t epoch = 0;
+  {
+    std::lock_guard<std::mutex> lock(state_mutex_);
+    prior = tracker_.priorAt(scan.stamp_s, &odometry_);
+    if (options_.deskew) {
+      twist = deskewTwist(scan, odometry_, tracker_, options_.deskew_twist_max_gap_s);
+    }
+    epoch = epoch_;
+  }
+  std::shared_ptr<const ChunkMap> map;
+  {
+    std::lock_guard<std::mutex> lock(map_mutex_);
+    map = map_snapshot_;
+  }
+  static const ChunkMap kEmpty;
+  const bool want_traversal = traversal_pub_.getNumSubscribers() > 0;
+  MatchReport report =
+      processor_->process(map ? *map : kEmpty, std::move(scan), prior, twist ? &*twist : nullptr,
+                          want_traversal, [] { return ros::WallTime::now().toSec(); });
+  std::string mode;
+  {
+    std::lock_guard<std::mutex> lock(state_mutex_);
+    if (epoch != epoch_) {
+      report.outcome = MatchOutcome::kSkipped;
+      report.reason = "discarded: time went backwards during the match";
+    } else if (report.outcome == MatchOutcome::kAccepted) {
+      Eigen::Matrix3d xyh;
+      const int idx[3] = {kStateX, kStateY, kStateYaw};
+      for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) xyh(i, j) = report.covariance(idx[i], idx[j]);
+      }
+      tracker_.onAccepted(report.stamp_s, report.pose, xyh, report.prior);
+    } else if (report.outcome == MatchOutcome::kRejected) {
+      tracker_.onRejected();
+    }
+    mode = priorModeName(tracker_.mode());
+  }
+  {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    last_mode_ = mode;
+  }
+  if (!report.accepted()) {
+    ROS_WARN_THROTTLE(5.0, "%s: scan at %.3f not matched (%s, prior %s): %s", name_.c_str(),
+                      report.stamp_s, matchOutcomeName(report.outcome),
+                      priorSourceName(report.prior.source), report.reason.c_str());
+  }
+  publishOutputs(report, msg->header.stamp, dropped);
+  record(report, dropped);
+}
+
+void Matcher::publishSkipped(const ros::Time& stamp, const std::string& reason, uint32_t dropped) {
+  MatchReport r;
+  r.stamp_s = stamp.toSec();
+  r.outcome = MatchOutcome::kSkipped;
+  r.reason = reason;
+  MatchStatus status;
+  toStatusMsg(r, options_.map_frame, (ros::Time::now() - stamp).toSec(), dropped, status);
+  status.header.stamp = stamp;
+  status_pub_.publish(status);
+  record(r, dropped);
+}
+
+void Matcher::publishOutputs(const MatchReport& report, const ros::Time& stamp, uint32_t dropped) {
+  geometry_msgs::PoseWithCovarianceStamped pose;
+  if (toMatchPoseMsg(report, options_.map_frame, pose)) {
+    pose.header.stamp = stamp;
+    pose_pub_.publish(pose);
+  } else if (report.accepted()) {
+    ROS_ERROR_THROTTLE(5.0, "%s: accepted match with a non-finite pose not published",
+                       name_.c_str());
+  }
+  MatchStatus status;
+  toStatusMsg(report, options_.map_frame, (ros::Time::now() - stamp).toSec(), dropped, status);
+  status.header.stamp = stamp;
+  status_pub_.publish(status);
+
+  // Debug outputs, only while someone listens.
+  if (obstacles_pub_.getNumSubscribers() > 0) {
+    sensor_msgs::PointCloud2 cloud;
+    const bool in_map = options_.obstacles_frame == options_.map_frame;
+    if (toObstaclesCloud(report, in_map, cloud)) {
+      cloud.header.stamp = stamp;
+      cloud.header.frame_id = options_.obstacles_frame;
+      obstacles_pub_.publish(cloud);
+    }
+  }
+  if (classified_pub_.getNumSubscribers() > 0) {
+    sensor_msgs::PointCloud2 cloud;
+    if (toClassifiedCloud(report, options_.classified_max_mahalanobis, cloud)) {
+      cloud.header.stamp = stamp;
+      cloud.header.frame_id = options_.map_frame;
+      classified_pub_.publish(cloud);
+    }
+  }
+  if (traversal_pub_.getNumSubscribers() > 0) {
+    sensor_msgs::Image image;
+    if (toTraversalImage(report, options_.traversal, image)) {
+      image.header.stamp = stamp;
+      image.header.frame_id = options_.map_frame;
+      traversal_pub_.publish(image);
+    }
+  }
+}
+
+}  // namespace node
+}  // namespace gmm_localization
