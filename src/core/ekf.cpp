@@ -87,6 +87,8 @@ Status Ekf::reset(const Eigen::Isometry3d& map_T_base, const Matrix6d& pose_cova
   history_.clear(*s);
   initialized_ = true;
   ++diagnostics_.resets;
+  // A new pose starts a new gating history: rejections in a row refer to the old estimate.
+  for (SourceCounters& c : diagnostics_.sources) c.consecutive_gate_rejections = 0;
   return Status::success();
 }
 
@@ -107,6 +109,7 @@ Status Ekf::setPose(const Eigen::Isometry3d& map_T_base, const Matrix6d& pose_co
   s.P.topLeftCorner<6, 6>() = pose->P.topLeftCorner<6, 6>();
   history_.clear(s);
   ++diagnostics_.resets;
+  for (SourceCounters& c : diagnostics_.sources) c.consecutive_gate_rejections = 0;
   return Status::success();
 }
 

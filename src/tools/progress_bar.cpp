@@ -66,9 +66,14 @@ void ProgressBar::draw(double fraction, const std::string& detail, bool final_li
   std::string bar(static_cast<size_t>(filled), '#');
   bar.resize(kWidth, '.');
   const double elapsed = elapsedSeconds();
-  const std::string eta = fraction > 0.0 && fraction < 1.0
-                              ? "ETA " + formatDuration(elapsed * (1.0 - fraction) / fraction)
-                              : "in " + formatDuration(elapsed);
+  // An ETA from the first item or the first second is noise (a first tile can be empty or
+  // huge): show "ETA ..." until there is something to extrapolate from.
+  std::string eta = "in " + formatDuration(elapsed);
+  if (fraction < 1.0) {
+    eta = fraction >= 0.02 && elapsed >= 1.0
+              ? "ETA " + formatDuration(elapsed * (1.0 - fraction) / fraction)
+              : "ETA ...";
+  }
   std::fprintf(stderr, "%s%-8s [%s] %3d%%  %s  %s%s", tty_ ? "\r\033[K" : "", label_.c_str(),
                bar.c_str(), static_cast<int>(fraction * 100.0), eta.c_str(), detail.c_str(),
                final_line || !tty_ ? "\n" : "");

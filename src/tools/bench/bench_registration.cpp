@@ -6,11 +6,13 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <ctime>
 #include <fstream>
 #include <random>
 #include <string>
+#include <thread>
 
 #include "bench_data.h"
 #include "bench_peers.h"
@@ -21,6 +23,13 @@ using namespace gmm_localization;
 using namespace gmm_localization::bench;
 
 namespace {
+
+/// The 1-minute load average: times are only comparable on an otherwise idle machine.
+std::string loadAverage() {
+  std::ifstream in("/proc/loadavg");
+  std::string one;
+  return (in >> one) ? one : std::string("unknown");
+}
 
 double now() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
@@ -56,6 +65,8 @@ void usage() {
       "  --voxel M            search voxel (registration default)\n"
       "  --ground-share S     largest share of ground points among search points (default)\n"
       "  --z-period N         raster z coarsening period (raster default)\n"
+      "  --layers N           raster layers (raster default)\n"
+      "  --refine-points N    points the hill climb scores (registration default)\n"
       "  --no-sizes           skip the scan-size table\n");
 }
 
@@ -101,6 +112,10 @@ bool parse(int argc, char** argv, Options& o) {
       o.reg.filter.ground_share = std::atof(v);
     else if (a == "--z-period")
       o.raster.z_coarsening_period = std::atoi(v);
+    else if (a == "--refine-points")
+      o.reg.refine_max_points = static_cast<size_t>(std::atoi(v));
+    else if (a == "--layers")
+      o.raster.num_layers = std::atoi(v);
     else {
       std::fprintf(stderr, "unknown option %s\n", a.c_str());
       return false;
@@ -130,6 +145,7 @@ Pose6 offsetPrior(const Eigen::Isometry3d& truth, double r, double h, std::mt199
 struct WindowRow {
   std::string name;
   std::vector<double> filter_ms, search_ms, total_ms, fraction, error_m, error_deg;
+  std::vector<double> refine_ms, covariance_ms, obstacles_ms;
   std::vector<double> points, lookups;  // search points per heading; evaluations x points
   int success = 0, runs = 0, equal = 0, compared = 0, failures = 0;
   std::vector<double> exhaustive_ms;
@@ -168,8 +184,12 @@ void runWindow(const Options& o, const ChunkMap& map, const std::vector<BenchSca
     }
     const double n = static_cast<double>(prepared->problem.points(0).size());
     const double t3 = now();
-    auto r = reg.finish(map, s.points, req, std::move(prepared.value()), bb, nullptr, nullptr);
+    RegistrationTiming timing;
+    auto r = reg.finish(map, s.points, req, std::move(prepared.value()), bb, now, &timing);
     const double t4 = now();
+    row.refine_ms.push_back(timing.refine_s * 1e3);
+    row.covariance_ms.push_back(timing.covariance_s * 1e3);
+    row.obstacles_ms.push_back(timing.obstacles_s * 1e3);
     row.filter_ms.push_back((t1 - t0) * 1e3);
     row.search_ms.push_back((t2 - t1) * 1e3);
     row.total_ms.push_back((t2 - t0 + t4 - t3) * 1e3);
@@ -193,16 +213,19 @@ void runWindow(const Options& o, const ChunkMap& map, const std::vector<BenchSca
 void printWindows(const std::vector<WindowRow>& rows) {
   std::printf(
       "| window | scans | search points (median) | prepare ms (median) | search ms median / p99 | "
-      "match total ms median / p99 | evaluations, %% of exhaustive (median / max) | table "
+      "refine / covariance / obstacles ms (median) | match total ms median / p99 | evaluations, %% "
+      "of exhaustive (median / max) | table "
       "lookups, millions (median / max) | equal to exhaustive | exhaustive search ms (median) | "
       "success <0.5 m, <1 deg | error after refinement median / p99 |\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const WindowRow& r : rows) {
     std::printf(
-        "| %s | %d | %.0f | %.1f | %.1f / %.1f | %.1f / %.1f | %.3f / %.3f | %.1f / %.1f | %d/%d "
+        "| %s | %d | %.0f | %.1f | %.1f / %.1f | %.1f / %.1f / %.1f | %.1f / %.1f | %.3f / %.3f | "
+        "%.1f / %.1f | %d/%d "
         "| %.0f | %d/%d (%.1f%%) | %.3f m, %.3f deg / %.3f m |\n",
         r.name.c_str(), r.runs, median(r.points), median(r.filter_ms), median(r.search_ms),
-        percentile(r.search_ms, 99), median(r.total_ms), percentile(r.total_ms, 99),
+        percentile(r.search_ms, 99), median(r.refine_ms), median(r.covariance_ms),
+        median(r.obstacles_ms), median(r.total_ms), percentile(r.total_ms, 99),
         100 * median(r.fraction), 100 * percentile(r.fraction, 100), median(r.lookups) / 1e6,
         percentile(r.lookups, 100) / 1e6, r.equal, r.compared, median(r.exhaustive_ms), r.success,
         r.runs, 100.0 * r.success / std::max(1, r.runs), median(r.error_m), median(r.error_deg),
@@ -244,6 +267,8 @@ int main(int argc, char** argv) {
   const std::time_t t = std::time(nullptr);
   std::strftime(date, sizeof(date), "%Y-%m-%d", std::localtime(&t));
   std::printf("# Registration benchmark, %s, one thread\n\n", date);
+  std::printf("load average at start (1 min, %d cores): %s\n",
+              static_cast<int>(std::thread::hardware_concurrency()), loadAverage().c_str());
   std::printf("map %s; %zu test scans from %s, %.0f raw points per scan on average\n",
               o.map_dir.c_str(), scans->size(), o.scans_dir.c_str(),
               static_cast<double>(raw) / scans->size());
@@ -331,5 +356,6 @@ int main(int argc, char** argv) {
                   median(row.search_ms), median(row.total_ms), row.success, row.runs);
     }
   }
+  std::printf("\nload average at the end (1 min): %s\n", loadAverage().c_str());
   return 0;
 }

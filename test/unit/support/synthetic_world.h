@@ -34,7 +34,7 @@ class SyntheticWorld {
     for (double bx = -half_m; bx < half_m; bx += block_m) {
       for (double by = -half_m; by < half_m; by += block_m) {
         // A block: street of 12 m on its low edges, buildings of random footprints inside.
-        const double x0 = bx + 6.0, y0 = by + 6.0, x1 = bx + block_m - 6.0, y1 = by + block_m - 6.0;
+        const double x0 = bx + 6.0, y0 = by + 6.0, x1 = bx + block_m - 6.0;
         double x = x0;
         while (x < x1 - 3.0) {
           const double w = 5.0 + 10.0 * u(rng);
