@@ -69,9 +69,22 @@ void EkfNode::setupDiagnostics() {
     s.add("time since scan match [s]", fixed(match_age, 2));
     if (options_.use_imu && (imu_age < 0.0 || imu_age > options_.imu_timeout_s)) {
       s.summary(diagnostic_msgs::DiagnosticStatus::WARN, "IMU dropout");
+      // A source that has spoken and went silent (not one that never started) is worth a line.
+      if (imu_age > 0.0) {
+        ROS_WARN_THROTTLE(5.0,
+                          "%s: IMU dropout: no sample for %.1f s (imu_timeout_s %.1f); the "
+                          "filter predicts without it",
+                          name_.c_str(), imu_age, options_.imu_timeout_s);
+      }
     }
     if (odom_age < 0.0 || odom_age > options_.odom_timeout_s) {
       s.summary(diagnostic_msgs::DiagnosticStatus::WARN, "INS odometry dropout");
+      if (odom_age > 0.0) {
+        ROS_WARN_THROTTLE(5.0,
+                          "%s: INS odometry dropout: no message for %.1f s (odom_timeout_s "
+                          "%.1f); the filter predicts without its twist",
+                          name_.c_str(), odom_age, options_.odom_timeout_s);
+      }
     }
     if (match_age < 0.0 || match_age > options_.match_timeout_s) {
       s.summary(diagnostic_msgs::DiagnosticStatus::WARN, "no scan matches");

@@ -348,7 +348,8 @@ int main(int argc, char** argv) {
   ros::init(argc, argv, "matcher_ekf_nodelets_test");
   ros::AsyncSpinner spinner(2);
   spinner.start();
-  gmm_localization::node::harness = std::make_unique<gmm_localization::node::testing_harness::Harness>();
+  gmm_localization::node::harness =
+      std::make_unique<gmm_localization::node::testing_harness::Harness>();
   const int result = RUN_ALL_TESTS();
   gmm_localization::node::harness.reset();
   spinner.stop();

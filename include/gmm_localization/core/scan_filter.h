@@ -22,8 +22,8 @@ struct ScanFilterOptions {
   double voxel_m = 0.2;  ///< voxel edge for downsampling [m]; 0 keeps every point
   /// Search points kept after voxelling (0 = all). Ground returns say little about x, y and
   /// heading, so ground keeps its natural share of them capped at ground_share (1: no bias);
-  /// the rest are above-ground structure (each class evenly thinned). Ground: within ground_band_m of the lowest point of its
-  /// ground_cell_m square in the levelled scan.
+  /// the rest are above-ground structure (each class evenly thinned). Ground: within ground_band_m
+  /// of the lowest point of its ground_cell_m square in the levelled scan.
   size_t max_points = 6000;
   double ground_share = 0.2;
   double ground_cell_m = 2.0;
@@ -33,9 +33,9 @@ struct ScanFilterOptions {
 };
 
 struct FilteredScan {
-  PointList points;  ///< search points, levelled base frame: base_link rotated by roll and
-                     ///< pitch (no yaw) [m]
-  PointList voxels;  ///< every voxel centroid (levelled), for the refinement
+  PointList points;          ///< search points, levelled base frame: base_link rotated by roll and
+                             ///< pitch (no yaw) [m]
+  PointList voxels;          ///< every voxel centroid (levelled), for the refinement
   size_t ground_voxels = 0;  ///< voxels classified as ground
   size_t input_points = 0;
   size_t dropped_nonfinite = 0;

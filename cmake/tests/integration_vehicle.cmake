@@ -1,0 +1,47 @@
+# Rostests of the real launch files (issue 5, item 8) on a fixture generated at build time:
+# scripts/make_test_fixture.sh runs the repository's simulate and build_map (a 250 m town, a
+# 20 s drive, its map; about 15-20 s on 2 cores) into the build directory.
+#  - roslaunch checks of every launch file (with their required args);
+#  - vehicle_nodelets:   localization.launch with all four nodelets in one manager, wired;
+#  - vehicle_replay:     replay.launch plays the drive; the EKF ends within 0.3 m and 1 deg of
+#                        the truth, statuses per scan, odometry at its rate;
+#  - vehicle_robustness: localization.launch under missing TF, IMU and INS dropouts, a vehicle
+#                        off the map (the test node plays the drive with those faults).
+find_package(rostest REQUIRED)
+find_package(roslaunch REQUIRED)
+
+roslaunch_add_file_check(launch/localization.launch map:=/tmp/no_map)
+roslaunch_add_file_check(launch/localization.launch map:=/tmp/no_map merge_clouds:=true rviz:=true
+  use_initial_pose:=true)
+roslaunch_add_file_check(launch/replay.launch map:=/tmp/no_map bag:=/tmp/no.bag)
+roslaunch_add_file_check(launch/replay.launch map:=/tmp/no_map bag:=/tmp/no.bag
+  record:=/tmp/out.bag rviz:=true merge_clouds:=true)
+
+set(GMM_VEHICLE_FIXTURE ${CMAKE_CURRENT_BINARY_DIR}/test_fixture/vehicle)
+add_custom_command(
+  OUTPUT ${GMM_VEHICLE_FIXTURE}/fixture.launch ${GMM_VEHICLE_FIXTURE}/fixture.yaml
+  COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/scripts/make_test_fixture.sh ${GMM_VEHICLE_FIXTURE}
+          $<TARGET_FILE:simulate> $<TARGET_FILE:build_map>
+  DEPENDS simulate build_map ${CMAKE_CURRENT_SOURCE_DIR}/scripts/make_test_fixture.sh
+  COMMENT "Generating the vehicle rostest fixture (simulate + build_map)"
+  VERBATIM)
+add_custom_target(gmm_vehicle_fixture
+  DEPENDS ${GMM_VEHICLE_FIXTURE}/fixture.launch ${GMM_VEHICLE_FIXTURE}/fixture.yaml)
+if(TARGET tests)
+  add_dependencies(tests gmm_vehicle_fixture)
+endif()
+
+set(GMM_VEHICLE_NODELETS gmm_map_server_nodelet gmm_matcher_nodelet gmm_ekf_nodelet
+  gmm_cloud_merger_nodelet)
+foreach(name nodelets replay robustness)
+  add_executable(rostest_vehicle_${name} EXCLUDE_FROM_ALL
+    test/integration/vehicle_${name}_test.cpp)
+  target_link_libraries(rostest_vehicle_${name} gmm_ros ${GTEST_LIBRARIES})
+  target_include_directories(rostest_vehicle_${name} SYSTEM PRIVATE ${GTEST_INCLUDE_DIRS})
+  add_dependencies(rostest_vehicle_${name} gmm_vehicle_fixture ${GMM_VEHICLE_NODELETS})
+  if(TARGET tests)
+    add_dependencies(tests rostest_vehicle_${name})
+  endif()
+  add_rostest(test/integration/vehicle_${name}.test ARGS fixture:=${GMM_VEHICLE_FIXTURE}
+    DEPENDENCIES rostest_vehicle_${name})
+endforeach()
