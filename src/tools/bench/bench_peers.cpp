@@ -36,7 +36,7 @@ PeerMatcher::PeerMatcher(Kind kind, const PeerOptions& options) : impl_(new Impl
   impl_->options = options;
   impl_->ndt.setResolution(static_cast<float>(options.ndt_resolution_m));
   impl_->ndt.setStepSize(options.ndt_step_size_m);
-  impl_->ndt.setTransformationEpsilon(options.epsilon);
+  impl_->ndt.setTransformationEpsilon(options.ndt_epsilon);
   impl_->ndt.setMaximumIterations(options.max_iterations);
   impl_->gicp.setMaxCorrespondenceDistance(options.gicp_max_correspondence_m);
   impl_->gicp.setTransformationEpsilon(options.epsilon * 0.1);

@@ -16,7 +16,11 @@ struct PeerOptions {
   double source_voxel_m = 0.5;    ///< scan downsampling
   double ndt_resolution_m = 1.0;  ///< NDT cell size (Autoware and hdl_localization: 1.0)
   double ndt_step_size_m = 0.1;
-  double epsilon = 0.01;
+  double epsilon = 0.01;  ///< GICP: transformation epsilon is 0.1 x this
+  /// NDT transformation epsilon. PCL 1.13 compares it with the squared update norm, which the
+  /// step size bounds (0.1^2 = 0.01): hdl_localization's 0.01 would stop NDT after its first
+  /// iteration. 1e-4 is the same 0.01 m on the update norm.
+  double ndt_epsilon = 1e-4;
   int max_iterations = 64;
   double gicp_max_correspondence_m = 5.0;
 };
