@@ -10,7 +10,7 @@ PACKAGES=(
   libdiagnostic-msgs-dev libnav-msgs-dev libstd-srvs-dev libvisualization-msgs-dev
   ros-message-generation
   python3-roslaunch python3-rostest python3-rosbag python3-numpy python3-matplotlib
-  libeigen3-dev zlib1g-dev libgtest-dev libbenchmark-dev libtbb-dev libembree-dev
+  libeigen3-dev libyaml-cpp-dev zlib1g-dev libgtest-dev libbenchmark-dev libtbb-dev libembree-dev
   rviz xvfb imagemagick clang-format
 )
 missing=()

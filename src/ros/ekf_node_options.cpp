@@ -8,7 +8,7 @@ namespace gmm_localization {
 namespace node {
 namespace {
 
-std::array<double, kStateSize> perState(const ros::NodeHandle& nh, const std::string& key,
+std::array<double, kStateSize> perState(const ParamSource& nh, const std::string& key,
                                         const std::array<double, kStateSize>& defaults) {
   if (!nh.hasParam(key)) return defaults;
   const std::vector<double> v =
@@ -27,7 +27,7 @@ std::array<double, kStateSize> perState(const ros::NodeHandle& nh, const std::st
 
 }  // namespace
 
-EkfOptions loadEkfOptions(const ros::NodeHandle& nh) {
+EkfOptions loadEkfOptions(const ParamSource& nh) {
   EkfOptions o;
   // Ranges are checked by EkfOptions::validate() (which names key, value and range).
   o.history_length_s = param(nh, "history_length_s", o.history_length_s);
@@ -63,8 +63,8 @@ EkfOptions loadEkfOptions(const ros::NodeHandle& nh) {
   return o;
 }
 
-FilterPolicyOptions loadFilterPolicyOptions(const ros::NodeHandle& parent) {
-  const ros::NodeHandle nh(parent, "policy");
+FilterPolicyOptions loadFilterPolicyOptions(const ParamSource& parent) {
+  const ParamSource nh = parent.child("policy");
   FilterPolicyOptions o;
   const std::vector<bool> mask_default(o.match_mask.begin(), o.match_mask.end());
   const std::vector<bool> mask = param<std::vector<bool>>(nh, "match_mask", mask_default);
@@ -99,7 +99,7 @@ FilterPolicyOptions loadFilterPolicyOptions(const ros::NodeHandle& parent) {
   return o;
 }
 
-EkfNodeOptions loadEkfNodeOptions(const ros::NodeHandle& pnh) {
+EkfNodeOptions loadEkfNodeOptions(const ParamSource& pnh) {
   EkfNodeOptions o;
   o.map_frame = param<std::string>(pnh, "map_frame", o.map_frame);
   o.odom_frame = param<std::string>(pnh, "odom_frame", o.odom_frame);

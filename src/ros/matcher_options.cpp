@@ -10,8 +10,8 @@ constexpr double kBig = 1e9;
 
 }  // namespace
 
-RegistrationOptions loadRegistrationOptions(const ros::NodeHandle& parent) {
-  const ros::NodeHandle nh(parent, "registration");
+RegistrationOptions loadRegistrationOptions(const ParamSource& parent) {
+  const ParamSource nh = parent.child("registration");
   RegistrationOptions o;
   ScanFilterOptions& f = o.filter;
   f.min_range_m = param(nh, "filter/min_range_m", f.min_range_m, 0.0, 1000.0);
@@ -53,7 +53,7 @@ RegistrationOptions loadRegistrationOptions(const ros::NodeHandle& parent) {
   return o;
 }
 
-LocalizationPolicyOptions loadLocalizationPolicyOptions(const ros::NodeHandle& nh) {
+LocalizationPolicyOptions loadLocalizationPolicyOptions(const ParamSource& nh) {
   LocalizationPolicyOptions o;
   WindowPolicyOptions& w = o.window;
   w.sigma_multiplier = param(nh, "window/sigma_multiplier", w.sigma_multiplier, 0.5, 10.0);
@@ -101,7 +101,7 @@ LocalizationPolicyOptions loadLocalizationPolicyOptions(const ros::NodeHandle& n
   return o;
 }
 
-MatcherOptions loadMatcherOptions(const ros::NodeHandle& pnh) {
+MatcherOptions loadMatcherOptions(const ParamSource& pnh) {
   MatcherOptions o;
   o.map_frame = param<std::string>(pnh, "map_frame", o.map_frame);
   o.base_frame = param<std::string>(pnh, "base_frame", o.base_frame);

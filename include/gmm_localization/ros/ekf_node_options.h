@@ -1,13 +1,16 @@
 #pragma once
 // Options of the ekf nodelet, loaded once from its private parameters (config/ekf.yaml
-// documents every key). The EKF core keys are EkfOptions' member names (core/ekf_options.h);
-// the filter policy keys FilterPolicyOptions' (core/localization_policy_filter.h).
+// documents every key) through a ParamSource (params.h: parameter server or an in-memory tree
+// such as the YAML file `evaluate` reads offline). The EKF core keys are EkfOptions' member
+// names (core/ekf_options.h); the filter policy keys FilterPolicyOptions'
+// (core/localization_policy_filter.h).
 
 #include <string>
 
 #include <ros/ros.h>
 
 #include "gmm_localization/core/localization_policy_filter.h"
+#include "gmm_localization/ros/params.h"
 
 namespace gmm_localization {
 namespace node {
@@ -33,11 +36,11 @@ struct EkfNodeOptions {
 };
 
 /// Throws ConfigError naming the key, value and range.
-EkfNodeOptions loadEkfNodeOptions(const ros::NodeHandle& pnh);
+EkfNodeOptions loadEkfNodeOptions(const ParamSource& pnh);
 /// EkfOptions from keys named after its members (lists of 15 for the per-state arrays).
-EkfOptions loadEkfOptions(const ros::NodeHandle& nh);
+EkfOptions loadEkfOptions(const ParamSource& nh);
 /// FilterPolicyOptions (keys under `policy/`).
-FilterPolicyOptions loadFilterPolicyOptions(const ros::NodeHandle& nh);
+FilterPolicyOptions loadFilterPolicyOptions(const ParamSource& nh);
 
 }  // namespace node
 }  // namespace gmm_localization

@@ -1,7 +1,8 @@
 #pragma once
 // Options of the matcher nodelet, loaded once from its private parameters (config/matcher.yaml
-// documents every key). The registration and policy loaders are public so that other tools
-// (e.g. `evaluate` with a parameter server) read the same keys.
+// documents every key). The loaders read a ParamSource (params.h): the nodelet passes its private
+// NodeHandle, the offline `evaluate` tool the same YAML file parsed into a tree, so both read
+// the same keys with the same checks. The registration and policy loaders are public too.
 
 #include <string>
 
@@ -12,6 +13,7 @@
 #include "gmm_localization/core/localizer_pipeline_traversal.h"
 #include "gmm_localization/core/registration.h"
 #include "gmm_localization/ros/ekf_node_options.h"
+#include "gmm_localization/ros/params.h"
 
 namespace gmm_localization {
 namespace node {
@@ -45,11 +47,11 @@ struct MatcherOptions {
 };
 
 /// Throws ConfigError naming the key, value and range.
-MatcherOptions loadMatcherOptions(const ros::NodeHandle& pnh);
+MatcherOptions loadMatcherOptions(const ParamSource& pnh);
 /// Keys under `registration/` (filter, search, hill climb, covariance, obstacles).
-RegistrationOptions loadRegistrationOptions(const ros::NodeHandle& nh);
+RegistrationOptions loadRegistrationOptions(const ParamSource& nh);
 /// Keys under `window/`, `acceptance/`, `covariance/`, `relocalization/`.
-LocalizationPolicyOptions loadLocalizationPolicyOptions(const ros::NodeHandle& nh);
+LocalizationPolicyOptions loadLocalizationPolicyOptions(const ParamSource& nh);
 
 /// The LocalizerPipeline options equivalent to a matcher + ekf nodelet pair with these options
 /// (for `evaluate`: load both with the loaders above from the same YAML files). The configured

@@ -1,0 +1,100 @@
+#include "evaluate_map.h"
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <mutex>
+#include <set>
+#include <thread>
+
+#include "gmm_localization/core/map_store.h"
+#include "gmm_localization/core/rasterizer.h"
+#include "gmm_localization/ros/map_server_planner.h"
+
+namespace gmm_localization {
+namespace eval {
+
+RasterOptions loadRasterOptions(const node::ParamSource& src) {
+  // The keys and ranges of node::loadMapServerOptions (src/ros/map_server_options.cpp).
+  RasterOptions r;
+  r.z_step_m = node::param(src, "z_step_m", r.z_step_m, 0.01, 2.0);
+  r.ll_floor = node::param(src, "ll_floor", r.ll_floor, -100.0, 10.0);
+  r.ll_ceiling = node::param(src, "ll_ceiling", r.ll_ceiling, -100.0, 20.0);
+  r.num_layers = node::param(src, "num_layers", r.num_layers, 0, 10);
+  r.z_coarsening_period = node::param(src, "z_coarsening_period", r.z_coarsening_period, 0, 10);
+  r.chunk_shift = node::param(src, "chunk_shift", r.chunk_shift, 4, 10);
+  node::requireValid("raster options", r.validate());
+  return r;
+}
+
+Result<std::shared_ptr<const ChunkMap>> rasterizeAlongRoute(const std::string& map_directory,
+                                                            const RasterOptions& options,
+                                                            const Trajectory& route,
+                                                            double radius_m, int threads,
+                                                            RouteMapStats* stats) {
+  using R = Result<std::shared_ptr<const ChunkMap>>;
+  const auto t0 = std::chrono::steady_clock::now();
+  auto store = MapStore::open(map_directory);
+  if (!store) return R::failure(store.error());
+  const std::string bad = options.validate();
+  if (!bad.empty()) return R::failure("raster options: " + bad);
+  const node::ChunkPlanner planner(store->geometry(), options, store->tileIds());
+
+  // Route points every few metres (the planner measures distances to chunk squares).
+  const double spacing_m = 5.0;
+  std::vector<node::PlanCentre> centres;
+  for (const PoseStamped2& p : route.samples()) {
+    if (centres.empty() || (centres.back() - node::PlanCentre(p.x, p.y)).norm() >= spacing_m) {
+      centres.emplace_back(p.x, p.y);
+    }
+  }
+  if (!route.empty()) {
+    centres.emplace_back(route.samples().back().x, route.samples().back().y);
+  }
+  const std::vector<ChunkId> chunks = planner.needed(centres, radius_m);
+  if (chunks.empty()) {
+    return R::failure("map '" + map_directory + "' has no data within " + std::to_string(radius_m) +
+                      " m of the route");
+  }
+  std::set<TileId> tile_ids;
+  for (const ChunkId& c : chunks) {
+    for (const TileId& t : planner.tilesFor(c)) tile_ids.insert(t);
+  }
+  GmmMap gmm(store->geometry());
+  for (const TileId& t : tile_ids) {
+    auto tile = store->loadTile(t);
+    if (!tile) return R::failure(tile.error());
+    gmm.insert(tile.value());
+  }
+
+  auto map = std::make_shared<ChunkMap>(store->geometry(), options);
+  std::mutex mutex;
+  std::atomic<size_t> next{0};
+  std::string error;
+  auto work = [&]() {
+    for (size_t i = next++; i < chunks.size(); i = next++) {
+      auto chunk = rasterizeChunk(gmm, chunks[i], options);
+      std::lock_guard<std::mutex> lock(mutex);
+      if (!chunk) {
+        if (error.empty()) error = chunk.error();
+      } else {
+        map->insert(chunk.value());
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int i = 1; i < std::max(1, threads); ++i) pool.emplace_back(work);
+  work();
+  for (std::thread& t : pool) t.join();
+  if (!error.empty()) return R::failure("rasterization: " + error);
+  if (stats != nullptr) {
+    stats->tiles = tile_ids.size();
+    stats->chunks = map->size();
+    stats->bytes = map->bytes();
+    stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+  return std::shared_ptr<const ChunkMap>(std::move(map));
+}
+
+}  // namespace eval
+}  // namespace gmm_localization

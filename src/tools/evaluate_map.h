@@ -1,0 +1,40 @@
+#pragma once
+// The rasterized map `evaluate` searches: the chunks the map server would serve along the
+// ground-truth route (ros/map_server_planner.h decides which), rasterized up front on worker
+// threads with the same rasterizer (core/rasterizer.h) and raster options.
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "evaluate_metrics.h"
+#include "gmm_localization/core/chunk_map.h"
+#include "gmm_localization/core/raster_options.h"
+#include "gmm_localization/core/result.h"
+#include "gmm_localization/ros/params.h"
+
+namespace gmm_localization {
+namespace eval {
+
+/// The map server's raster keys (config/map_server.yaml: z_step_m, ll_floor, ll_ceiling,
+/// num_layers, z_coarsening_period, chunk_shift) with the map server's ranges. Throws
+/// node::ConfigError naming the key.
+RasterOptions loadRasterOptions(const node::ParamSource& src);
+
+struct RouteMapStats {
+  size_t tiles = 0;
+  size_t chunks = 0;
+  size_t bytes = 0;
+  double seconds = 0.0;  ///< wall time to load and rasterize
+};
+
+/// Rasterizes every chunk with data within radius_m of the route (ground-truth samples at least
+/// every spacing_m), on `threads` threads. Fails with the reason (unreadable map, bad tile).
+Result<std::shared_ptr<const ChunkMap>> rasterizeAlongRoute(const std::string& map_directory,
+                                                            const RasterOptions& options,
+                                                            const Trajectory& route,
+                                                            double radius_m, int threads,
+                                                            RouteMapStats* stats = nullptr);
+
+}  // namespace eval
+}  // namespace gmm_localization
