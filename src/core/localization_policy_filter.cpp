@@ -106,8 +106,40 @@ void LocalizationFilter::checkTime(const FuseReport& r) {
   if (r.outcome != FuseOutcome::kRejectedInvalid) forward_jumps_ = 0;
 }
 
+namespace {
+/// Appends to a history kept while the filter is inactive: clears it when time went backwards
+/// and drops what is older than the span.
+template <typename T>
+void keepPending(std::deque<T>& q, const T& m, double span_s) {
+  if (!q.empty() && m.stamp_s < q.back().stamp_s) q.clear();
+  q.push_back(m);
+  while (!q.empty() && q.front().stamp_s < m.stamp_s - span_s) q.pop_front();
+}
+}  // namespace
+
+void LocalizationFilter::replayPending(double stamp_s) {
+  std::deque<ImuMeasurement> imu;
+  std::deque<TwistMeasurement> twist;
+  imu.swap(pending_imu_);
+  twist.swap(pending_twist_);
+  while (active_ && (!imu.empty() || !twist.empty())) {
+    const bool take_imu =
+        !imu.empty() && (twist.empty() || imu.front().stamp_s <= twist.front().stamp_s);
+    if (take_imu) {
+      if (imu.front().stamp_s > stamp_s) addImu(imu.front());
+      imu.pop_front();
+    } else {
+      if (twist.front().stamp_s > stamp_s) addTwist(twist.front());
+      twist.pop_front();
+    }
+  }
+}
+
 std::vector<FuseReport> LocalizationFilter::addImu(ImuMeasurement imu) {
-  if (!active_) return {};
+  if (!active_) {
+    keepPending(pending_imu_, imu, kPendingSpanS);
+    return {};
+  }
   const MeasurementDefaults& d = options_.defaults;
   if (allZero(imu.orientation_covariance)) {
     imu.orientation_covariance =
@@ -131,6 +163,7 @@ std::vector<FuseReport> LocalizationFilter::addImu(ImuMeasurement imu) {
 
 FuseReport LocalizationFilter::addTwist(TwistMeasurement twist) {
   if (!active_) {
+    keepPending(pending_twist_, twist, kPendingSpanS);
     FuseReport r;
     r.source = MeasurementSource::kTwist;
     r.outcome = FuseOutcome::kRejectedNotInitialized;
@@ -169,6 +202,7 @@ FuseReport LocalizationFilter::addMatch(double stamp_s, const Pose6& pose,
     active_ = true;
     gate_run_ = forward_jumps_ = 0;
     event(FilterEventKind::kInitializedFromMatch, stamp_s, "filter started from a scan match");
+    replayPending(stamp_s);
     r.outcome = FuseOutcome::kFused;
     r.dimension = 6;
     return r;
@@ -255,6 +289,7 @@ Status LocalizationFilter::setInitialPose(const Pose6& pose_in, const Matrix6d& 
   active_ = true;
   gate_run_ = forward_jumps_ = 0;
   event(FilterEventKind::kInitializedFromPose, stamp_s, "initial pose");
+  if (restart) replayPending(stamp_s);
   return Status::success();
 }
 

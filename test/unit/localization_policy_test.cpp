@@ -374,6 +374,28 @@ TEST(LocalizationFilter, StartsFromAMatchAndUsesDefaultCovariances) {
   EXPECT_EQ(g->addMatch(1.0, p, matchCov(0.05)).outcome, FuseOutcome::kRejectedNotInitialized);
 }
 
+TEST(LocalizationFilter, ADelayedFirstMatchIsBroughtForwardWithTheKeptTwists) {
+  auto f = LocalizationFilter::create(EkfOptions(), FilterPolicyOptions());
+  ASSERT_TRUE(f.ok()) << f.error();
+  // The vehicle drives along x at 10 m/s; INS twists arrive at 100 Hz from 0 to 1 s, and the
+  // match of the scan stamped 0.5 s (x = 5 m) arrives after all of them.
+  for (int k = 0; k <= 100; ++k) {
+    TwistMeasurement m = still(0.01 * k);
+    m.linear_mps.x() = 10.0;
+    m.covariance.diagonal() << 0.01, 0.01, 0.01, 1e-4, 1e-4, 1e-4;
+    EXPECT_EQ(f->addTwist(m).outcome, FuseOutcome::kRejectedNotInitialized);
+  }
+  Pose6 p;
+  p.x = 5.0;
+  ASSERT_TRUE(f->addMatch(0.5, p, matchCov(0.05)).fused());
+  auto s = f->stateAt(1.0);
+  ASSERT_TRUE(s.ok()) << s.error();
+  // Without the replay of the kept twists the estimate would stay at 5 m (where the vehicle
+  // was when the scan was taken) until new twists arrive.
+  EXPECT_NEAR(s->x(kStateX), 10.0, 0.3);
+  EXPECT_NEAR(s->x(kStateVx), 10.0, 0.5);
+}
+
 TEST(LocalizationFilter, GateLockoutAndRelocalizeInflateTheCovariance) {
   FilterPolicyOptions o;
   o.gate_lockout_count = 3;

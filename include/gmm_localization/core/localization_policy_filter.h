@@ -19,6 +19,7 @@
 // ROS-free; not thread-safe (one caller thread or a lock).
 
 #include <array>
+#include <deque>
 #include <string>
 #include <vector>
 
@@ -82,10 +83,16 @@ class LocalizationFilter {
   static Result<LocalizationFilter> create(const EkfOptions& ekf,
                                            const FilterPolicyOptions& policy);
 
-  /// IMU sample in base_link; zero covariances get the defaults. Empty when inactive.
+  /// IMU sample in base_link; zero covariances get the defaults. Empty when inactive; the
+  /// samples of the last kPendingSpanS are then kept and replayed after the stamp of the pose
+  /// that starts the filter (a scan match arrives a few hundred ms after its stamp: without
+  /// the replay the first estimate would stay where the vehicle was then).
   std::vector<FuseReport> addImu(ImuMeasurement imu);
-  /// INS body twist; a zero covariance gets the defaults.
+  /// INS body twist; a zero covariance gets the defaults. Kept like IMU samples while inactive.
   FuseReport addTwist(TwistMeasurement twist);
+
+  /// How much IMU and twist history is kept while the filter waits for its first pose [s].
+  static constexpr double kPendingSpanS = 2.0;
   /// Scan match at stamp_s: pose of base_link in map with its 6x6 covariance (x, y, z, roll,
   /// pitch, yaw), fused with match_mask (or starting the filter, see the file comment).
   FuseReport addMatch(double stamp_s, const Pose6& pose, const Matrix6d& covariance);
@@ -116,8 +123,12 @@ class LocalizationFilter {
   void checkTime(const FuseReport& report);
   Status inflate(FilterEventKind kind, double stamp_s, std::string detail);
   void event(FilterEventKind kind, double stamp_s, std::string detail);
+  /// Feeds the kept IMU and twist samples stamped after stamp_s, in time order, then drops all.
+  void replayPending(double stamp_s);
 
   Ekf ekf_;
+  std::deque<ImuMeasurement> pending_imu_;
+  std::deque<TwistMeasurement> pending_twist_;
   FilterPolicyOptions options_;
   bool active_ = false;
   int gate_run_ = 0;
