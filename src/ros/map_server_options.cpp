@@ -8,7 +8,19 @@
 namespace gmm_localization {
 namespace node {
 
-MapServerOptions loadMapServerOptions(const ros::NodeHandle& pnh) {
+RasterOptions loadRasterOptions(const ParamSource& pnh) {
+  RasterOptions r;
+  r.z_step_m = param(pnh, "z_step_m", r.z_step_m, 0.01, 2.0);
+  r.ll_floor = param(pnh, "ll_floor", r.ll_floor, -100.0, 10.0);
+  r.ll_ceiling = param(pnh, "ll_ceiling", r.ll_ceiling, -100.0, 20.0);
+  r.num_layers = param(pnh, "num_layers", r.num_layers, 0, 10);
+  r.z_coarsening_period = param(pnh, "z_coarsening_period", r.z_coarsening_period, 0, 10);
+  r.chunk_shift = param(pnh, "chunk_shift", r.chunk_shift, 4, 10);
+  requireValid("raster options", r.validate());
+  return r;
+}
+
+MapServerOptions loadMapServerOptions(const ParamSource& pnh) {
   MapServerOptions o;
   o.map_directory = param<std::string>(pnh, "map_directory", "");
   if (o.map_directory.empty()) {
@@ -26,14 +38,7 @@ MapServerOptions loadMapServerOptions(const ros::NodeHandle& pnh) {
   e.tile_cache_radius_m = param(pnh, "tile_cache_radius_m", e.tile_cache_radius_m, 0.0, 2000.0);
   e.hysteresis_m = param(pnh, "hysteresis_m", e.hysteresis_m, 0.0, 1000.0);
   e.worker_threads = param(pnh, "worker_threads", e.worker_threads, 1, 16);
-  RasterOptions& r = e.raster;
-  r.z_step_m = param(pnh, "z_step_m", r.z_step_m, 0.01, 2.0);
-  r.ll_floor = param(pnh, "ll_floor", r.ll_floor, -100.0, 10.0);
-  r.ll_ceiling = param(pnh, "ll_ceiling", r.ll_ceiling, -100.0, 20.0);
-  r.num_layers = param(pnh, "num_layers", r.num_layers, 0, 10);
-  r.z_coarsening_period = param(pnh, "z_coarsening_period", r.z_coarsening_period, 0, 10);
-  r.chunk_shift = param(pnh, "chunk_shift", r.chunk_shift, 4, 10);
-  requireValid("raster options", r.validate());
+  e.raster = loadRasterOptions(pnh);
   requireValid("map server options", e.validate());
 
   o.update_period_s = param(pnh, "update_period_s", o.update_period_s, 0.02, 10.0);

@@ -14,19 +14,6 @@
 namespace gmm_localization {
 namespace eval {
 
-RasterOptions loadRasterOptions(const node::ParamSource& src) {
-  // The keys and ranges of node::loadMapServerOptions (src/ros/map_server_options.cpp).
-  RasterOptions r;
-  r.z_step_m = node::param(src, "z_step_m", r.z_step_m, 0.01, 2.0);
-  r.ll_floor = node::param(src, "ll_floor", r.ll_floor, -100.0, 10.0);
-  r.ll_ceiling = node::param(src, "ll_ceiling", r.ll_ceiling, -100.0, 20.0);
-  r.num_layers = node::param(src, "num_layers", r.num_layers, 0, 10);
-  r.z_coarsening_period = node::param(src, "z_coarsening_period", r.z_coarsening_period, 0, 10);
-  r.chunk_shift = node::param(src, "chunk_shift", r.chunk_shift, 4, 10);
-  node::requireValid("raster options", r.validate());
-  return r;
-}
-
 Result<std::shared_ptr<const ChunkMap>> rasterizeAlongRoute(const std::string& map_directory,
                                                             const RasterOptions& options,
                                                             const Trajectory& route,

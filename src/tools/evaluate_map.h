@@ -11,15 +11,14 @@
 #include "gmm_localization/core/chunk_map.h"
 #include "gmm_localization/core/raster_options.h"
 #include "gmm_localization/core/result.h"
+#include "gmm_localization/ros/map_server_options.h"
 #include "gmm_localization/ros/params.h"
 
 namespace gmm_localization {
 namespace eval {
 
-/// The map server's raster keys (config/map_server.yaml: z_step_m, ll_floor, ll_ceiling,
-/// num_layers, z_coarsening_period, chunk_shift) with the map server's ranges. Throws
-/// node::ConfigError naming the key.
-RasterOptions loadRasterOptions(const node::ParamSource& src);
+/// The map server's raster keys: node::loadRasterOptions (ros/map_server_options.h).
+using node::loadRasterOptions;
 
 struct RouteMapStats {
   size_t tiles = 0;

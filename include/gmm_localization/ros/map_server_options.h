@@ -9,6 +9,7 @@
 
 #include "gmm_localization/ros/map_server_engine.h"
 #include "gmm_localization/ros/map_server_planner.h"
+#include "gmm_localization/ros/params.h"
 
 namespace gmm_localization {
 namespace node {
@@ -29,7 +30,11 @@ struct MapServerOptions {
 
 /// Reads and validates the options (throws ConfigError). The map directory is only required to
 /// be non-empty here; the server reports an unreadable map itself.
-MapServerOptions loadMapServerOptions(const ros::NodeHandle& pnh);
+MapServerOptions loadMapServerOptions(const ParamSource& pnh);
+
+/// The raster keys alone (z_step_m, ll_floor, ll_ceiling, num_layers, z_coarsening_period,
+/// chunk_shift), validated: also what `evaluate` reads from config/map_server.yaml.
+RasterOptions loadRasterOptions(const ParamSource& pnh);
 
 }  // namespace node
 }  // namespace gmm_localization
