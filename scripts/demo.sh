@@ -111,20 +111,9 @@ for ds in "${DATASETS[@]}"; do
   end
 done
 
-# The replay's initial pose: the bag's first ground truth moved by 2 m, -1.5 m and 2 deg, as a
-# GPS fix would be (the matcher searches 25 m x 25 m x +-15 deg around it).
+# The replay's initial pose: the bag's first ground truth moved like a GPS fix would be.
 initial_pose_args() {
-  /usr/bin/python3 - "$1" <<'EOF'
-import math, sys
-import rosbag
-with rosbag.Bag(sys.argv[1]) as bag:
-    for _, m, _ in bag.read_messages(topics=["/ground_truth/odom"]):
-        p, q = m.pose.pose.position, m.pose.pose.orientation
-        yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
-        print("initial_x:=%.3f initial_y:=%.3f initial_z:=%.3f initial_yaw:=%.4f" % (
-            p.x + 2.0, p.y - 1.5, p.z, yaw + math.radians(2.0)))
-        break
-EOF
+  /usr/bin/python3 "$GMM_REPO/scripts/initial_pose_args.py" "$1"
 }
 
 # A free TCP port for the replay's own master (never the default 11311 another master may hold).

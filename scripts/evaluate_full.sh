@@ -56,18 +56,7 @@ done
 if [ "$REPLAY" = 1 ]; then
   for ds in downtown snowy; do
     port=$(/usr/bin/python3 -c "import socket; s=socket.socket(); s.bind(('127.0.0.1', 0)); print(s.getsockname()[1])")
-    args=$(/usr/bin/python3 - "$OUT/$ds.bag" <<'EOF'
-import math, sys
-import rosbag
-with rosbag.Bag(sys.argv[1]) as bag:
-    for _, m, _ in bag.read_messages(topics=["/ground_truth/odom"]):
-        p, q = m.pose.pose.position, m.pose.pose.orientation
-        yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
-        print("initial_x:=%.3f initial_y:=%.3f initial_z:=%.3f initial_yaw:=%.4f" % (
-            p.x + 2.0, p.y - 1.5, p.z, yaw + math.radians(2.0)))
-        break
-EOF
-)
+    args=$(/usr/bin/python3 "$GMM_REPO/scripts/initial_pose_args.py" "$OUT/$ds.bag")
     # shellcheck disable=SC2086
     ROS_MASTER_URI="http://localhost:$port" ROS_LOG_DIR="$OUT/ros_logs" \
       roslaunch -p "$port" gmm_localization replay.launch bag:="$OUT/$ds.bag" map:="$OUT/map" \
