@@ -19,7 +19,8 @@ namespace gmm_localization {
 
 struct RegistrationOptions {
   ScanFilterOptions filter;           ///< scan preparation for the search
-  size_t refine_max_points = 1500;    ///< points the hill climb scores (evenly thinned)
+  size_t refine_max_points = 3000;    ///< points the hill climb scores (evenly thinned); the
+                                      ///< matcher config uses 1500 (faster, 2 mm coarser)
   double heading_step_rad = 0.00873;  ///< search heading resolution [rad] (0.5 deg)
   double z_search_m = 1.0;  ///< height pre-alignment range +- around the prior [m]; 0: off
   bool exhaustive = false;  ///< Algorithm 2 instead of branch-and-bound (reference, slow)
