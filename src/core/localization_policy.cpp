@@ -7,16 +7,10 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "gmm_localization/core/option_checks.h"
+
 namespace gmm_localization {
 namespace {
-
-// Empty when lo <= value <= hi (value finite), else "<key> = <value> must be in [lo, hi]".
-std::string range(const char* key, double value, double lo, double hi) {
-  if (std::isfinite(value) && value >= lo && value <= hi) return {};
-  std::ostringstream s;
-  s << key << " = " << value << " must be in [" << lo << ", " << hi << "]";
-  return s.str();
-}
 
 template <typename... Checks>
 std::string firstError(const Checks&... checks) {
@@ -47,14 +41,15 @@ std::string formatted(const char* what, double value, const char* relation, doub
 }  // namespace
 
 std::string WindowPolicyOptions::validate() const {
-  std::string e = firstError(range("window.sigma_multiplier", sigma_multiplier, 0.5, 10.0),
-                             range("window.min_half_xy_m", min_half_xy_m, 0.2, 100.0),
-                             range("window.max_half_xy_m", max_half_xy_m, 0.2, 100.0),
-                             range("window.min_half_heading_rad", min_half_heading_rad, 0.0, 1.6),
-                             range("window.max_half_heading_rad", max_half_heading_rad, 0.0, 1.6),
-                             range("window.wide_half_xy_m", wide_half_xy_m, 0.2, 100.0),
-                             range("window.wide_half_heading_rad", wide_half_heading_rad, 0.0, 1.6),
-                             range("window.unknown_z_search_m", unknown_z_search_m, 0.0, 20.0));
+  std::string e =
+      firstError(rangeProblem("window.sigma_multiplier", sigma_multiplier, 0.5, 10.0),
+                 rangeProblem("window.min_half_xy_m", min_half_xy_m, 0.2, 100.0),
+                 rangeProblem("window.max_half_xy_m", max_half_xy_m, 0.2, 100.0),
+                 rangeProblem("window.min_half_heading_rad", min_half_heading_rad, 0.0, 1.6),
+                 rangeProblem("window.max_half_heading_rad", max_half_heading_rad, 0.0, 1.6),
+                 rangeProblem("window.wide_half_xy_m", wide_half_xy_m, 0.2, 100.0),
+                 rangeProblem("window.wide_half_heading_rad", wide_half_heading_rad, 0.0, 1.6),
+                 rangeProblem("window.unknown_z_search_m", unknown_z_search_m, 0.0, 20.0));
   if (!e.empty()) return e;
   if (min_half_xy_m > max_half_xy_m) return "window.min_half_xy_m must be <= max_half_xy_m";
   if (min_half_heading_rad > max_half_heading_rad) {
@@ -64,31 +59,32 @@ std::string WindowPolicyOptions::validate() const {
 }
 
 std::string AcceptancePolicyOptions::validate() const {
-  return firstError(
-      range("acceptance.min_log_likelihood_per_point", min_log_likelihood_per_point, -100.0, 10.0),
-      range("acceptance.min_map_coverage", min_map_coverage, 0.0, 1.0),
-      range("acceptance.max_sigma_xy_m", max_sigma_xy_m, 0.0, 1000.0),
-      range("acceptance.max_sigma_yaw_rad", max_sigma_yaw_rad, 0.0, 10.0));
+  return firstError(rangeProblem("acceptance.min_log_likelihood_per_point",
+                                 min_log_likelihood_per_point, -100.0, 10.0),
+                    rangeProblem("acceptance.min_map_coverage", min_map_coverage, 0.0, 1.0),
+                    rangeProblem("acceptance.max_sigma_xy_m", max_sigma_xy_m, 0.0, 1000.0),
+                    rangeProblem("acceptance.max_sigma_yaw_rad", max_sigma_yaw_rad, 0.0, 10.0));
 }
 
 std::string PoseCovariancePolicyOptions::validate() const {
-  return firstError(range("covariance.search_covariance_scale", search_covariance_scale, 1e-3, 1e3),
-                    range("covariance.fixed_sigma_xy_m", fixed_sigma_xy_m, 1e-4, 100.0),
-                    range("covariance.fixed_sigma_yaw_rad", fixed_sigma_yaw_rad, 1e-5, 3.2),
-                    range("covariance.min_sigma_xy_m", min_sigma_xy_m, 1e-4, 100.0),
-                    range("covariance.min_sigma_yaw_rad", min_sigma_yaw_rad, 1e-5, 3.2),
-                    range("covariance.sigma_z_m", sigma_z_m, 1e-4, 100.0),
-                    range("covariance.sigma_roll_pitch_rad", sigma_roll_pitch_rad, 1e-5, 3.2));
+  return firstError(
+      rangeProblem("covariance.search_covariance_scale", search_covariance_scale, 1e-3, 1e3),
+      rangeProblem("covariance.fixed_sigma_xy_m", fixed_sigma_xy_m, 1e-4, 100.0),
+      rangeProblem("covariance.fixed_sigma_yaw_rad", fixed_sigma_yaw_rad, 1e-5, 3.2),
+      rangeProblem("covariance.min_sigma_xy_m", min_sigma_xy_m, 1e-4, 100.0),
+      rangeProblem("covariance.min_sigma_yaw_rad", min_sigma_yaw_rad, 1e-5, 3.2),
+      rangeProblem("covariance.sigma_z_m", sigma_z_m, 1e-4, 100.0),
+      rangeProblem("covariance.sigma_roll_pitch_rad", sigma_roll_pitch_rad, 1e-5, 3.2));
 }
 
 std::string RelocalizationPolicyOptions::validate() const {
   return firstError(
-      range("relocalization.max_consecutive_rejections", max_consecutive_rejections, 1, 1e6),
-      range("relocalization.max_posterior_age_s", max_posterior_age_s, 0.0, 60.0),
-      range("relocalization.max_previous_match_age_s", max_previous_match_age_s, 0.0, 600.0),
-      range("relocalization.previous_match_sigma_growth_mps", previous_match_sigma_growth_mps, 0.0,
-            100.0),
-      range("relocalization.max_stale_prior_age_s", max_stale_prior_age_s, 0.0, 1e6));
+      rangeProblem("relocalization.max_consecutive_rejections", max_consecutive_rejections, 1, 1e6),
+      rangeProblem("relocalization.max_posterior_age_s", max_posterior_age_s, 0.0, 60.0),
+      rangeProblem("relocalization.max_previous_match_age_s", max_previous_match_age_s, 0.0, 600.0),
+      rangeProblem("relocalization.previous_match_sigma_growth_mps",
+                   previous_match_sigma_growth_mps, 0.0, 100.0),
+      rangeProblem("relocalization.max_stale_prior_age_s", max_stale_prior_age_s, 0.0, 1e6));
 }
 
 std::string LocalizationPolicyOptions::validate() const {

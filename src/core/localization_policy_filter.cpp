@@ -4,16 +4,10 @@
 #include <sstream>
 
 #include "gmm_localization/core/exact_scorer.h"
+#include "gmm_localization/core/option_checks.h"
 
 namespace gmm_localization {
 namespace {
-
-std::string range(const char* key, double value, double lo, double hi) {
-  if (std::isfinite(value) && value >= lo && value <= hi) return {};
-  std::ostringstream s;
-  s << key << " = " << value << " must be in [" << lo << ", " << hi << "]";
-  return s.str();
-}
 
 template <typename M>
 bool allZero(const M& m) {
@@ -24,13 +18,14 @@ bool allZero(const M& m) {
 
 std::string MeasurementDefaults::validate() const {
   for (const std::string& e :
-       {range("defaults.imu_orientation_sigma_rad", imu_orientation_sigma_rad, 1e-6, 10.0),
-        range("defaults.imu_angular_velocity_sigma_radps", imu_angular_velocity_sigma_radps, 1e-6,
-              10.0),
-        range("defaults.imu_linear_acceleration_sigma_mps2", imu_linear_acceleration_sigma_mps2,
-              1e-6, 100.0),
-        range("defaults.twist_linear_sigma_mps", twist_linear_sigma_mps, 1e-6, 100.0),
-        range("defaults.twist_angular_sigma_radps", twist_angular_sigma_radps, 1e-6, 10.0)}) {
+       {rangeProblem("defaults.imu_orientation_sigma_rad", imu_orientation_sigma_rad, 1e-6, 10.0),
+        rangeProblem("defaults.imu_angular_velocity_sigma_radps", imu_angular_velocity_sigma_radps,
+                     1e-6, 10.0),
+        rangeProblem("defaults.imu_linear_acceleration_sigma_mps2",
+                     imu_linear_acceleration_sigma_mps2, 1e-6, 100.0),
+        rangeProblem("defaults.twist_linear_sigma_mps", twist_linear_sigma_mps, 1e-6, 100.0),
+        rangeProblem("defaults.twist_angular_sigma_radps", twist_angular_sigma_radps, 1e-6,
+                     10.0)}) {
     if (!e.empty()) return e;
   }
   return {};
@@ -38,12 +33,13 @@ std::string MeasurementDefaults::validate() const {
 
 std::string FilterPolicyOptions::validate() const {
   for (const std::string& e :
-       {range("gate_lockout_count", gate_lockout_count, 1, 1e6),
-        range("relocalize_sigma_xy_m", relocalize_sigma_xy_m, 1e-3, 1000.0),
-        range("relocalize_sigma_yaw_rad", relocalize_sigma_yaw_rad, 1e-4, 3.2),
-        range("unknown_z_sigma_m", unknown_z_sigma_m, 1e-3, 1000.0),
-        range("unknown_tilt_sigma_rad", unknown_tilt_sigma_rad, 1e-4, 3.2),
-        range("forward_jump_reset_count", forward_jump_reset_count, 1, 1e6), defaults.validate()}) {
+       {rangeProblem("gate_lockout_count", gate_lockout_count, 1, 1e6),
+        rangeProblem("relocalize_sigma_xy_m", relocalize_sigma_xy_m, 1e-3, 1000.0),
+        rangeProblem("relocalize_sigma_yaw_rad", relocalize_sigma_yaw_rad, 1e-4, 3.2),
+        rangeProblem("unknown_z_sigma_m", unknown_z_sigma_m, 1e-3, 1000.0),
+        rangeProblem("unknown_tilt_sigma_rad", unknown_tilt_sigma_rad, 1e-4, 3.2),
+        rangeProblem("forward_jump_reset_count", forward_jump_reset_count, 1, 1e6),
+        defaults.validate()}) {
     if (!e.empty()) return e;
   }
   bool any = false;

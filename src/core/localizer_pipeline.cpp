@@ -4,15 +4,12 @@
 #include <cmath>
 #include <sstream>
 
+#include "gmm_localization/core/option_checks.h"
+
 namespace gmm_localization {
 
 std::string LocalizerPipelineOptions::validate() const {
-  auto bad = [](const char* key, double v, double lo, double hi) -> std::string {
-    if (std::isfinite(v) && v >= lo && v <= hi) return {};
-    std::ostringstream s;
-    s << key << " = " << v << " must be in [" << lo << ", " << hi << "]";
-    return s.str();
-  };
+  const auto bad = rangeProblem;
   for (const std::string& e :
        {bad("odometry_buffer_s", odometry_buffer_s, 0.1, 3600.0),
         bad("odometry_max_extrapolation_s", odometry_max_extrapolation_s, 0.0, 10.0),

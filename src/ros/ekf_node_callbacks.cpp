@@ -121,19 +121,7 @@ void EkfNode::onMatch(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& 
 
 void EkfNode::onInitialPose(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg) {
   std::lock_guard<std::mutex> lock(mutex_);
-  geometry_msgs::PoseWithCovarianceStamped in_map = *msg;
-  if (msg->header.frame_id != options_.map_frame) {
-    try {
-      const auto t = tf_buffer_.lookupTransform(options_.map_frame, msg->header.frame_id,
-                                                ros::Time(0), ros::Duration(0.1));
-      in_map.pose.pose = toPoseMsg(tf2::transformToEigen(t) * fromPoseMsg(msg->pose.pose));
-    } catch (const tf2::TransformException& e) {
-      ROS_WARN("%s: initial pose in frame '%s' ignored: %s", name_.c_str(),
-               msg->header.frame_id.c_str(), e.what());
-      return;
-    }
-  }
-  const auto pose = poseFromMsg(in_map);
+  const auto pose = initialPoseInMap(*msg, options_.map_frame, tf_buffer_);
   if (!pose) {
     ROS_WARN("%s: initial pose ignored: %s", name_.c_str(), pose.error().c_str());
     return;

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include <tf2_eigen/tf2_eigen.h>
+
 #include "gmm_localization/core/exact_scorer.h"
 #include "gmm_localization/ros/pose_conversion.h"
 
@@ -124,6 +126,23 @@ Result<PoseWithCovariance6> poseFromMsg(const geometry_msgs::PoseWithCovarianceS
   out.covariance = covarianceFromMsg(msg.pose.covariance);
   if (!out.covariance.allFinite()) return R::failure("pose covariance has a non-finite value");
   return out;
+}
+
+Result<PoseWithCovariance6> initialPoseInMap(const geometry_msgs::PoseWithCovarianceStamped& msg,
+                                             const std::string& map_frame,
+                                             const tf2_ros::Buffer& tf) {
+  geometry_msgs::PoseWithCovarianceStamped in_map = msg;
+  if (msg.header.frame_id != map_frame) {
+    try {
+      const auto t =
+          tf.lookupTransform(map_frame, msg.header.frame_id, ros::Time(0), ros::Duration(0.1));
+      in_map.pose.pose = toPoseMsg(tf2::transformToEigen(t) * fromPoseMsg(msg.pose.pose));
+    } catch (const tf2::TransformException& e) {
+      return Result<PoseWithCovariance6>::failure("in frame '" + msg.header.frame_id +
+                                                  "': " + e.what());
+    }
+  }
+  return poseFromMsg(in_map);
 }
 
 }  // namespace node

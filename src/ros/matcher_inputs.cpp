@@ -1,8 +1,6 @@
 // Matcher inputs other than scans: INS odometry, EKF posterior, initial pose, map (matcher.h).
 #include <cmath>
 
-#include <tf2_eigen/tf2_eigen.h>
-
 #include "gmm_localization/core/exact_scorer.h"
 #include "gmm_localization/ros/ekf_node_conversions.h"
 #include "gmm_localization/ros/matcher.h"
@@ -51,21 +49,7 @@ void Matcher::onPosterior(const nav_msgs::Odometry::ConstPtr& msg) {
 }
 
 void Matcher::onInitialPose(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg) {
-  geometry_msgs::PoseWithCovarianceStamped in_map = *msg;
-  if (msg->header.frame_id != options_.map_frame) {
-    try {
-      const auto t = tf_buffer_.lookupTransform(options_.map_frame, msg->header.frame_id,
-                                                ros::Time(0), ros::Duration(0.1));
-      const Eigen::Isometry3d map_T_frame = tf2::transformToEigen(t);
-      const Eigen::Isometry3d pose = map_T_frame * fromPoseMsg(msg->pose.pose);
-      in_map.pose.pose = toPoseMsg(pose);
-    } catch (const tf2::TransformException& e) {
-      ROS_WARN("%s: initial pose in frame '%s' ignored: %s", name_.c_str(),
-               msg->header.frame_id.c_str(), e.what());
-      return;
-    }
-  }
-  const auto pose = poseFromMsg(in_map);
+  const auto pose = initialPoseInMap(*msg, options_.map_frame, tf_buffer_);
   if (!pose) {
     ROS_WARN("%s: initial pose ignored: %s", name_.c_str(), pose.error().c_str());
     return;

@@ -12,6 +12,7 @@
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <nav_msgs/Odometry.h>
 #include <sensor_msgs/Imu.h>
+#include <tf2_ros/buffer.h>
 #include <Eigen/Geometry>
 
 #include "gmm_localization/core/ekf_measurement.h"
@@ -58,6 +59,13 @@ struct PoseWithCovariance6 {
   Matrix6d covariance = Matrix6d::Zero();
 };
 Result<PoseWithCovariance6> poseFromMsg(const geometry_msgs::PoseWithCovarianceStamped& msg);
+
+/// An /initialpose message (rviz "2D Pose Estimate") in map_frame: a pose in another frame is
+/// moved into it with the latest TF (waiting up to 0.1 s), then converted by poseFromMsg. The
+/// error says which step failed.
+Result<PoseWithCovariance6> initialPoseInMap(const geometry_msgs::PoseWithCovarianceStamped& msg,
+                                             const std::string& map_frame,
+                                             const tf2_ros::Buffer& tf);
 
 }  // namespace node
 }  // namespace gmm_localization
