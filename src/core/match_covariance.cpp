@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 namespace gmm_localization {
@@ -13,6 +14,7 @@ std::string CovarianceOptions::validate() const {
   if (!(temperature_per_point > 0.0)) return "temperature_per_point must be > 0";
   if (!(min_sigma_xy_m > 0.0 && min_sigma_yaw_rad > 0.0)) return "minimum sigmas must be > 0";
   if (!(edge_mass_limit > 0.0 && edge_mass_limit <= 1.0)) return "edge_mass_limit in (0, 1]";
+  if (max_points > 0 && max_points < 100) return "max_points must be 0 (all) or >= 100";
   return {};
 }
 
@@ -27,6 +29,27 @@ MatchCovariance searchCovariance(const SearchProblem& problem, const SearchOutco
   const int j1 = std::min(w.sizeH() - 1, optimum.heading_index + o.heading_radius);
   const int nx = tx1 - tx0 + 1, ny = ty1 - ty0 + 1;
 
+  // Score the neighbourhood (on a thinned point set when asked), heading by heading.
+  const size_t prepared = problem.points(optimum.heading_index).size();
+  const int stride = o.max_points > 0 && prepared > o.max_points
+                         ? static_cast<int>((prepared + o.max_points - 1) / o.max_points)
+                         : 1;
+  // Scores in whole-scan units: each heading's thinned sum scaled by the scan points over the
+  // points it scored (exact when nothing is thinned).
+  std::vector<std::vector<double>> scores(j1 - j0 + 1);
+  std::vector<int64_t> block;
+  double peak = -std::numeric_limits<double>::infinity();
+  for (int j = j0; j <= j1; ++j) {
+    const int64_t scored = problem.scoreBlock(j, tx0, ty0, nx, ny, block, stride);
+    const double to_scan = static_cast<double>(problem.scanPoints()) /
+                           static_cast<double>(std::max<int64_t>(1, scored));
+    std::vector<double>& s = scores[j - j0];
+    s.resize(block.size());
+    for (size_t i = 0; i < block.size(); ++i) {
+      s[i] = static_cast<double>(block[i]) * to_scan;
+      peak = std::max(peak, s[i]);
+    }
+  }
   const ScoreQuantizer q(problem.map().options());
   const double temperature = o.temperature_per_point * std::max<int64_t>(1, problem.scanPoints());
   const double scale = q.step() / temperature;  // score units -> exponent
@@ -36,13 +59,11 @@ MatchCovariance searchCovariance(const SearchProblem& problem, const SearchOutco
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   Eigen::Matrix3d second = Eigen::Matrix3d::Zero();
   Eigen::Vector3d edge = Eigen::Vector3d::Zero();
-  std::vector<int64_t> scores;
   for (int j = j0; j <= j1; ++j) {
-    problem.scoreBlock(j, tx0, ty0, nx, ny, scores);
     for (int iy = 0; iy < ny; ++iy) {
       for (int ix = 0; ix < nx; ++ix) {
         const double p =
-            std::exp((scores[static_cast<size_t>(iy) * nx + ix] - optimum.score) * scale);
+            std::exp((scores[j - j0][static_cast<size_t>(iy) * nx + ix] - peak) * scale);
         const Eigen::Vector3d d((tx0 + ix - optimum.tx) * res, (ty0 + iy - optimum.ty) * res,
                                 (j - optimum.heading_index) * w.heading_step_rad);
         mass += p;

@@ -3,11 +3,17 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <unordered_map>
 
 #include <Eigen/Geometry>
 
+#include "gmm_localization/core/key_index.h"
+#include "gmm_localization/core/map_geometry.h"
+
 namespace gmm_localization {
+
+namespace {
+constexpr uint64_t kMask31 = (uint64_t{1} << 31) - 1;
+}  // namespace
 
 std::string ScanFilterOptions::validate() const {
   if (!(min_range_m >= 0.0 && max_range_m > min_range_m)) {
@@ -72,20 +78,28 @@ FilteredScan filterScan(const PointList& base_points, double roll_rad, double pi
 }
 
 std::vector<bool> groundMask(const PointList& pts, double cell_m, double band_m) {
-  std::unordered_map<uint64_t, float> lowest;
-  lowest.reserve(pts.size() / 8 + 16);
-  auto key = [cell_m](const Eigen::Vector3f& p) {
-    const int64_t ix = static_cast<int64_t>(std::floor(p.x() / cell_m)) + (int64_t{1} << 31);
-    const int64_t iy = static_cast<int64_t>(std::floor(p.y() / cell_m)) + (int64_t{1} << 31);
-    return (static_cast<uint64_t>(ix) << 32) ^ static_cast<uint64_t>(iy);
+  const double inv = 1.0 / cell_m;
+  auto key = [inv](const Eigen::Vector3f& p) {  // 31 bits per axis, offset to be non-negative
+    const uint64_t ix = static_cast<uint64_t>(floorToInt(p.x() * inv) + (int64_t{1} << 30));
+    const uint64_t iy = static_cast<uint64_t>(floorToInt(p.y() * inv) + (int64_t{1} << 30));
+    return ((ix & kMask31) << 31) | (iy & kMask31);
   };
-  for (const Eigen::Vector3f& p : pts) {
-    auto [it, inserted] = lowest.emplace(key(p), p.z());
-    if (!inserted) it->second = std::min(it->second, p.z());
+  KeyIndex cells(pts.size() / 16);
+  std::vector<float> lowest;
+  std::vector<uint32_t> cell_of(pts.size());
+  for (size_t i = 0; i < pts.size(); ++i) {
+    bool inserted = false;
+    const uint32_t c = cells.insert(key(pts[i]), inserted);
+    if (inserted) {
+      lowest.push_back(pts[i].z());
+    } else {
+      lowest[c] = std::min(lowest[c], pts[i].z());
+    }
+    cell_of[i] = c;
   }
   std::vector<bool> ground(pts.size());
   for (size_t i = 0; i < pts.size(); ++i) {
-    ground[i] = pts[i].z() <= lowest[key(pts[i])] + static_cast<float>(band_m);
+    ground[i] = pts[i].z() <= lowest[cell_of[i]] + static_cast<float>(band_m);
   }
   return ground;
 }
@@ -113,46 +127,33 @@ PointList selectSearchPoints(const PointList& pts, const std::vector<bool>& grou
 }
 
 PointList voxelDownsample(const PointList& points, double voxel_m) {
-  // Open-addressing hash of voxel keys (21 bits per axis, +-200 km at 0.2 m), accumulating
-  // centroids; output follows first-seen order, so the result is deterministic.
-  struct Slot {
-    uint64_t key = 0;  // 0 = empty (keys are offset so that none is 0)
-    uint32_t index = 0;
-  };
-  size_t capacity = 16;
-  while (capacity < 2 * points.size()) capacity <<= 1;
-  std::vector<Slot> table(capacity);
-  std::vector<Eigen::Vector3d> sum;
-  std::vector<uint32_t> count;
-  sum.reserve(points.size() / 2);
-  count.reserve(points.size() / 2);
+  // Voxel keys of 21 bits per axis (+-200 km at 0.2 m) numbered in first-seen order, so the
+  // output order is deterministic; centroids accumulate in double. Scans arrive ring by ring,
+  // so consecutive points often share a voxel: the last key is checked before the table.
   const double inv = 1.0 / voxel_m;
   constexpr int64_t kOffset = int64_t{1} << 20;
   constexpr uint64_t kMask = (uint64_t{1} << 21) - 1;
+  KeyIndex voxels(points.size() / 4);
+  std::vector<Eigen::Vector3d> sum;
+  std::vector<uint32_t> count;
+  uint64_t last_key = ~uint64_t{0};
+  uint32_t last = 0;
   for (const Eigen::Vector3f& p : points) {
-    const int64_t ix = static_cast<int64_t>(std::floor(p.x() * inv)) + kOffset;
-    const int64_t iy = static_cast<int64_t>(std::floor(p.y() * inv)) + kOffset;
-    const int64_t iz = static_cast<int64_t>(std::floor(p.z() * inv)) + kOffset;
-    const uint64_t key = ((static_cast<uint64_t>(ix) & kMask) << 42) |
-                         ((static_cast<uint64_t>(iy) & kMask) << 21) |
-                         (static_cast<uint64_t>(iz) & kMask) | (uint64_t{1} << 63);
-    size_t h = (key * 0x9E3779B97F4A7C15ull) >> 20;
-    while (true) {
-      Slot& s = table[h & (capacity - 1)];
-      if (s.key == 0) {
-        s.key = key;
-        s.index = static_cast<uint32_t>(sum.size());
-        sum.push_back(p.cast<double>());
-        count.push_back(1);
-        break;
+    const uint64_t ix = static_cast<uint64_t>(floorToInt(p.x() * inv) + kOffset) & kMask;
+    const uint64_t iy = static_cast<uint64_t>(floorToInt(p.y() * inv) + kOffset) & kMask;
+    const uint64_t iz = static_cast<uint64_t>(floorToInt(p.z() * inv) + kOffset) & kMask;
+    const uint64_t key = (ix << 42) | (iy << 21) | iz;
+    if (key != last_key) {
+      bool inserted = false;
+      last = voxels.insert(key, inserted);
+      last_key = key;
+      if (inserted) {
+        sum.emplace_back(Eigen::Vector3d::Zero());
+        count.push_back(0);
       }
-      if (s.key == key) {
-        sum[s.index] += p.cast<double>();
-        ++count[s.index];
-        break;
-      }
-      ++h;
     }
+    sum[last] += p.cast<double>();
+    ++count[last];
   }
   PointList out(sum.size());
   for (size_t i = 0; i < sum.size(); ++i) out[i] = (sum[i] / count[i]).cast<float>();

@@ -134,18 +134,21 @@ Result<SearchProblem> SearchProblem::create(const ChunkMap& map, const PointList
   int64_t gx_min = std::numeric_limits<int64_t>::max(), gy_min = gx_min;
   int64_t gx_max = std::numeric_limits<int64_t>::min(), gy_max = gx_max;
   const Pose6& prior = window.prior;
+  // Heights do not change with heading: bin them once.
+  std::vector<int32_t> z_bins(points.size());
+  for (size_t i = 0; i < points.size(); ++i) z_bins[i] = map.zBin(prior.z + points[i].z());
   for (int j = 0; j < window.sizeH(); ++j) {
     const double yaw = prior.yaw + (j - window.half_h) * window.heading_step_rad;
     const double c = std::cos(yaw), s = std::sin(yaw);
     std::vector<CellPoint>& out = rotated[j];
-    out.reserve(points.size());
-    for (const Eigen::Vector3f& q : points) {
+    out.resize(points.size());
+    for (size_t i = 0; i < points.size(); ++i) {
+      const Eigen::Vector3f& q = points[i];
       const double x = prior.x + c * q.x() - s * q.y();
       const double y = prior.y + s * q.x() + c * q.y();
-      const double z = prior.z + q.z();
       const CellIndex cell = g.cellAt(x, y);
-      out.push_back({static_cast<int32_t>(cell.x - window.half_x),
-                     static_cast<int32_t>(cell.y - window.half_y), map.zBin(z), 1u});
+      out[i] = {static_cast<int32_t>(cell.x - window.half_x),
+                static_cast<int32_t>(cell.y - window.half_y), z_bins[i], 1u};
     }
     // Sort by (row, column, z bin): the tables store each cell's z span contiguously and the
     // cells row by row, so this order reads them almost sequentially. Then merge points that
@@ -245,13 +248,18 @@ void SearchProblem::scoreQuad(int heading_index, int layer, int tx, int ty, int 
   out[3] = s11;
 }
 
-void SearchProblem::scoreBlock(int heading_index, int tx0, int ty0, int nx, int ny,
-                               std::vector<int64_t>& out) const {
+int64_t SearchProblem::scoreBlock(int heading_index, int tx0, int ty0, int nx, int ny,
+                                  std::vector<int64_t>& out, int point_stride) const {
   std::vector<int32_t> acc(static_cast<size_t>(nx) * ny, 0);
   const int shift = raster_.shift();
   const int64_t mask = (int64_t{1} << shift) - 1;
-  for (const CellPoint& p : rotated_[heading_index]) {
+  const std::vector<CellPoint>& pts = rotated_[heading_index];
+  const size_t stride = static_cast<size_t>(std::max(1, point_stride));
+  int64_t scored = 0;
+  for (size_t k = 0; k < pts.size(); k += stride) {
+    const CellPoint& p = pts[k];
     const int32_t count = static_cast<int32_t>(p.count);
+    scored += count;
     for (int r = 0; r < ny; ++r) {
       const int64_t gy = static_cast<int64_t>(p.gy) + ty0 + r;
       int32_t* row = acc.data() + static_cast<size_t>(r) * nx;
@@ -274,6 +282,7 @@ void SearchProblem::scoreBlock(int heading_index, int tx0, int ty0, int nx, int 
     }
   }
   out.assign(acc.begin(), acc.end());
+  return scored;
 }
 
 Pose6 SearchProblem::pose(int heading_index, int tx, int ty) const {

@@ -45,6 +45,8 @@ RegistrationOptions loadRegistrationOptions(const ParamSource& parent) {
   c.min_sigma_xy_m = param(nh, "covariance/min_sigma_xy_m", c.min_sigma_xy_m, 1e-6, 100.0);
   c.min_sigma_yaw_rad = param(nh, "covariance/min_sigma_yaw_rad", c.min_sigma_yaw_rad, 1e-7, 3.2);
   c.edge_mass_limit = param(nh, "covariance/edge_mass_limit", c.edge_mass_limit, 1e-6, 1.0);
+  c.max_points = static_cast<size_t>(
+      param(nh, "covariance/max_points", static_cast<int>(c.max_points), 0, 1000000));
   o.classify_obstacles = param(nh, "classify_obstacles", o.classify_obstacles);
   o.obstacles.mahalanobis_threshold =
       param(nh, "obstacles/mahalanobis_threshold", o.obstacles.mahalanobis_threshold, 0.0, 1000.0);

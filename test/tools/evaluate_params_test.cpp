@@ -30,7 +30,7 @@ TEST(EvaluateParams, ShippedConfigFilesLoadThroughTheNodeletLoaders) {
   const node::EkfNodeOptions e = node::loadEkfNodeOptions(yamlParamSource(kConfig + "/ekf.yaml"));
   const RasterOptions r = loadRasterOptions(yamlParamSource(kConfig + "/map_server.yaml"));
   // Values written in the files (not the defaults in code).
-  EXPECT_EQ(m.registration.filter.max_points, 6000u);
+  EXPECT_EQ(m.registration.filter.max_points, 4000u);
   EXPECT_DOUBLE_EQ(m.registration.filter.min_range_m, 3.0);
   EXPECT_DOUBLE_EQ(m.registration.heading_step_rad, 0.00873);
   EXPECT_EQ(m.base_frame, "base_link");

@@ -139,6 +139,44 @@ TEST(RegistrationCovariance, LargerAlongACorridorThanAcrossIt) {
   EXPECT_TRUE(c.isApprox(c.transpose()));
 }
 
+TEST_F(RegistrationTest, ThinnedCovarianceTracksTheFullOne) {
+  // The covariance on every 4th prepared point against the one on all of them: the tempered
+  // distribution scales with the points scored, so the two agree to within sampling noise.
+  std::mt19937 rng(77);
+  const Registration reg{RegistrationOptions()};
+  CovarianceOptions all, thin;
+  all.max_points = 0;
+  double lo = 1e9, hi = 0.0, floor_share = 0.0;
+  for (int c = 0; c < 8; ++c) {
+    const Pose6 truth = world_->streetPose(rng);
+    const PointList scan = world_->scan(truth, 35.0, 0.25, 0.0, 300 + c);
+    MatchRequest req;
+    req.prior = truth;
+    req.half_x_m = req.half_y_m = 2.0;
+    req.half_heading_rad = 0.0524;
+    auto prepared = reg.prepare(*chunks_, scan, req);
+    ASSERT_TRUE(prepared.ok()) << prepared.error();
+    const SearchProblem& problem = prepared->problem;
+    const SearchOutcome best = branchAndBoundSearch(problem, BranchAndBoundOptions());
+    thin.max_points = problem.points(best.heading_index).size() / 4;
+    ASSERT_GE(thin.max_points, 100u) << "case " << c;
+    const MatchCovariance a = searchCovariance(problem, best, all);
+    const MatchCovariance b = searchCovariance(problem, best, thin);
+    for (int k = 0; k < 3; ++k) {
+      const double ratio = std::sqrt(b.covariance(k, k) / a.covariance(k, k));
+      lo = std::min(lo, ratio);
+      hi = std::max(hi, ratio);
+      const double floor_sd = k < 2 ? all.min_sigma_xy_m : all.min_sigma_yaw_rad;
+      floor_share += std::sqrt(a.covariance(k, k)) < 1.01 * floor_sd ? 1.0 / 24 : 0.0;
+      EXPECT_GT(ratio, 0.67) << "case " << c << " axis " << k;
+      EXPECT_LT(ratio, 1.5) << "case " << c << " axis " << k;
+    }
+  }
+  std::printf("thinned / full sigma: %.3f .. %.3f; %.0f%% of the sigmas at their floor\n", lo, hi,
+              100.0 * floor_share);
+  EXPECT_LT(floor_share, 0.5);  // the comparison must be about estimated spreads, not floors
+}
+
 TEST_F(RegistrationTest, DropsNonFinitePointsAndRejectsEmptyOrOffMapScans) {
   std::mt19937 rng(5);
   const Pose6 truth = world_->streetPose(rng);

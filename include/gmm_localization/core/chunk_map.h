@@ -39,7 +39,7 @@ class ChunkMap {
   }
   /// Global z bin of a map-frame height [m].
   int32_t zBin(double z_m) const {
-    return static_cast<int32_t>(std::floor(z_m / options_.z_step_m));
+    return static_cast<int32_t>(floorToInt(z_m / options_.z_step_m));
   }
 
   /// Layer-k value at a global cell and base z bin; 0 (the floor) where no chunk is loaded.

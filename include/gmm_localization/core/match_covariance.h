@@ -25,6 +25,10 @@ struct CovarianceOptions {
   /// distribution is truncated there: that axis gets at least the variance of a uniform
   /// distribution over the whole search window (conservative).
   double edge_mass_limit = 0.05;
+  /// Prepared search points scored per pose (evenly thinned; 0: all). The tempered
+  /// distribution scales with the points scored, so a subset estimates the same covariance at
+  /// a fraction of the table reads.
+  size_t max_points = 2000;
 
   std::string validate() const;
 };

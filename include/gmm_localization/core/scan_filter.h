@@ -24,7 +24,7 @@ struct ScanFilterOptions {
   /// heading, so ground keeps its natural share of them capped at ground_share (1: no bias);
   /// the rest are above-ground structure (each class evenly thinned). Ground: within ground_band_m
   /// of the lowest point of its ground_cell_m square in the levelled scan.
-  size_t max_points = 6000;
+  size_t max_points = 4000;
   double ground_share = 0.2;
   double ground_cell_m = 2.0;
   double ground_band_m = 0.25;

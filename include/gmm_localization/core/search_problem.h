@@ -108,8 +108,11 @@ class SearchProblem {
   void scoreQuad(int heading_index, int layer, int tx, int ty, int h, int64_t out[4]) const;
   /// Base-layer scores of translations tx in [tx0, tx0 + nx), ty in [ty0, ty0 + ny) at heading j,
   /// row-major in ty, into out (resized). Row-contiguous table reads (z-slab-major layout).
-  void scoreBlock(int heading_index, int tx0, int ty0, int nx, int ny,
-                  std::vector<int64_t>& out) const;
+  /// point_stride > 1 scores only every point_stride-th prepared point (an estimate for the
+  /// covariance, never for the search). Returns the scan points scored (the sum of their merge
+  /// counts).
+  int64_t scoreBlock(int heading_index, int tx0, int ty0, int nx, int ny, std::vector<int64_t>& out,
+                     int point_stride = 1) const;
 
   /// Pose of translation (tx, ty) and heading j.
   Pose6 pose(int heading_index, int tx, int ty) const;
