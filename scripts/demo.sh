@@ -58,6 +58,7 @@ begin "install dependencies"
 end
 
 begin "build (simulate, build_map, evaluate, nodelets)"
+mkdir -p "$GMM_WS"  # the log below is opened before build.sh creates it on a fresh clone
 LOCK=()
 [ -n "${GMM_BUILD_LOCK:-}" ] && LOCK=(flock "$GMM_BUILD_LOCK")
 "${LOCK[@]}" "$GMM_REPO/scripts/build.sh" simulate build_map evaluate gmm_map_server_nodelet \

@@ -23,6 +23,7 @@ AZ=()
 TOWN=(--town-size 1200 --route-length 3000)
 
 "$GMM_REPO/scripts/install_deps.sh"
+mkdir -p "$GMM_WS"  # the log below is opened before build.sh creates it on a fresh clone
 "$GMM_REPO/scripts/build.sh" simulate build_map evaluate gmm_map_server_nodelet \
   gmm_matcher_nodelet gmm_ekf_nodelet >"$GMM_WS/full_build.log" 2>&1 ||
   { tail -n 40 "$GMM_WS/full_build.log"; exit 1; }
