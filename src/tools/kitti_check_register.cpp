@@ -112,16 +112,6 @@ std::vector<WindowSpec> defaultWindows() {
   return {paper, tracking};
 }
 
-Pose6 offsetPrior(const Eigen::Isometry3d& truth, double r_m, double h_rad, std::mt19937& rng) {
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  Pose6 p = fromIsometry(truth);
-  const double rho = r_m * std::sqrt(u(rng)), phi = 2.0 * M_PI * u(rng);
-  p.x += rho * std::cos(phi);
-  p.y += rho * std::sin(phi);
-  p.yaw += (2.0 * u(rng) - 1.0) * h_rad;
-  return p;
-}
-
 void poseErrors(const Eigen::Isometry3d& pose, const Eigen::Isometry3d& truth, Trial& t) {
   const Eigen::Vector3d d = pose.translation() - truth.translation();
   t.error_m = d.head<2>().norm();

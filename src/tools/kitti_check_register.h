@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_data.h"
 #include "bench/bench_peers.h"
 #include "gmm_localization/core/raster_options.h"
 #include "gmm_localization/core/registration.h"
@@ -85,8 +86,8 @@ struct LooReport {
 /// Runs every fold; progress lines go to stderr. Fails on unreadable data or a map build error.
 Result<LooReport> runLeaveOneOut(const LooOptions& options);
 
-/// A prior offset from `truth`: uniform in a disc of radius r [m], heading within +-h [rad].
-Pose6 offsetPrior(const Eigen::Isometry3d& truth, double r_m, double h_rad, std::mt19937& rng);
+/// Seeded prior offsets: the benchmark's own.
+using bench::offsetPrior;
 
 /// Horizontal [m] (also split along and across truth's heading), heading [deg] and |z| [m]
 /// errors of `pose` against `truth`.

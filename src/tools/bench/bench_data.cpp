@@ -6,6 +6,7 @@
 #include <map>
 #include <set>
 
+#include "gmm_localization/core/exact_scorer.h"
 #include "gmm_localization/core/kitti_source.h"
 #include "gmm_localization/core/rasterizer.h"
 
@@ -128,6 +129,16 @@ Result<PointList> targetCloud(const std::string& mapping_dir, const Eigen::Vecto
   }
   if (used == 0) return R::failure("no mapping scan near the test scan");
   return voxelDownsample(all, voxel_m);
+}
+
+Pose6 offsetPrior(const Eigen::Isometry3d& truth, double r_m, double h_rad, std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Pose6 p = fromIsometry(truth);
+  const double rho = r_m * std::sqrt(u(rng)), phi = 2.0 * M_PI * u(rng);
+  p.x += rho * std::cos(phi);
+  p.y += rho * std::sin(phi);
+  p.yaw += (2.0 * u(rng) - 1.0) * h_rad;
+  return p;
 }
 
 double median(std::vector<double> v) { return percentile(std::move(v), 50.0); }

@@ -3,6 +3,7 @@
 // directory (the simulator's localization pass), the rasterized map around them, and target
 // point clouds for the point-cloud peers (NDT, GICP) from the mapping pass.
 
+#include <random>
 #include <string>
 #include <vector>
 
@@ -12,6 +13,7 @@
 #include "gmm_localization/core/map_store.h"
 #include "gmm_localization/core/result.h"
 #include "gmm_localization/core/scan_filter.h"
+#include "gmm_localization/core/search_problem.h"
 
 namespace gmm_localization {
 namespace bench {
@@ -39,6 +41,10 @@ Result<ChunkMap> rasterizeAround(const MapStore& store, const std::vector<Eigen:
 /// downsampled to voxel_m, in the map frame: the kind of map NDT/GICP localizers use.
 Result<PointList> targetCloud(const std::string& mapping_dir, const Eigen::Vector3d& centre,
                               double radius_m, double voxel_m);
+
+/// A prior offset from `truth`: uniform in a disc of radius r_m [m], heading within +-h_rad
+/// [rad] (the benchmark's and kitti_check's seeded offsets).
+Pose6 offsetPrior(const Eigen::Isometry3d& truth, double r_m, double h_rad, std::mt19937& rng);
 
 double median(std::vector<double> v);
 double percentile(std::vector<double> v, double p);

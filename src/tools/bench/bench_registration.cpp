@@ -131,17 +131,6 @@ bool parse(int argc, char** argv, Options& o) {
 double yawOf(const Eigen::Isometry3d& T) { return std::atan2(T.linear()(1, 0), T.linear()(0, 0)); }
 double angleDiff(double a, double b) { return std::atan2(std::sin(a - b), std::cos(a - b)); }
 
-/// A prior offset from the truth: uniform in a disc of radius r and +-h in heading.
-Pose6 offsetPrior(const Eigen::Isometry3d& truth, double r, double h, std::mt19937& rng) {
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  Pose6 p = fromIsometry(truth);
-  const double rho = r * std::sqrt(u(rng)), phi = 2.0 * M_PI * u(rng);
-  p.x += rho * std::cos(phi);
-  p.y += rho * std::sin(phi);
-  p.yaw += (2.0 * u(rng) - 1.0) * h;
-  return p;
-}
-
 struct WindowRow {
   std::string name;
   std::vector<double> filter_ms, search_ms, filter_search_ms, total_ms, fraction, error_m,
