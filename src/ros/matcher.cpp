@@ -24,6 +24,8 @@ Matcher::Matcher(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& nam
   auto processor = MatchProcessor::create(options_.registration, options_.policy);
   if (!processor) throw ConfigError(processor.error());
   processor_ = std::make_unique<MatchProcessor>(std::move(processor).value());
+  waiting_ = DropOldestQueue<sensor_msgs::PointCloud2::ConstPtr>(
+      static_cast<size_t>(options_.scan_queue_size));
   armConfiguredPose();
 
   pose_pub_ = nh_.advertise<geometry_msgs::PoseWithCovarianceStamped>("pose", 10);

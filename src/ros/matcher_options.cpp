@@ -120,6 +120,7 @@ MatcherOptions loadMatcherOptions(const ParamSource& pnh) {
       param(pnh, "odometry_max_extrapolation_s", o.odometry_max_extrapolation_s, 0.0, 10.0);
   o.time_backwards_tolerance_s =
       param(pnh, "time_backwards_tolerance_s", o.time_backwards_tolerance_s, 0.0, kBig);
+  o.scan_queue_size = param(pnh, "scan_queue_size", o.scan_queue_size, 1, 100);
 
   o.initial_pose_enabled = param(pnh, "initial_pose/enabled", o.initial_pose_enabled);
   o.initial_pose.x = param(pnh, "initial_pose/x", o.initial_pose.x, -kBig, kBig);

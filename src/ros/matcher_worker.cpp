@@ -43,12 +43,14 @@ void Matcher::onScan(const sensor_msgs::PointCloud2::ConstPtr& msg) {
   }
   {
     std::lock_guard<std::mutex> lock(queue_mutex_);
-    if (waiting_) {
-      ++dropped_since_status_;
+    // A slow match (the first, wide search) leaves a backlog that the tracking matches after it
+    // drain; beyond the queue's size the oldest scan goes.
+    const size_t dropped = waiting_.push(msg);
+    if (dropped > 0) {
+      dropped_since_status_ += static_cast<uint32_t>(dropped);
       std::lock_guard<std::mutex> stats(stats_mutex_);
-      ++dropped_total_;
+      dropped_total_ += dropped;
     }
-    waiting_ = msg;
   }
   queue_cv_.notify_one();
 }
@@ -59,10 +61,9 @@ void Matcher::workerLoop() {
     uint32_t dropped = 0;
     {
       std::unique_lock<std::mutex> lock(queue_mutex_);
-      queue_cv_.wait(lock, [this] { return stop_ || waiting_ != nullptr; });
+      queue_cv_.wait(lock, [this] { return stop_ || !waiting_.empty(); });
       if (stop_) return;
-      msg = std::move(waiting_);
-      waiting_.reset();
+      msg = waiting_.pop();
       dropped = dropped_since_status_;
       dropped_since_status_ = 0;
     }

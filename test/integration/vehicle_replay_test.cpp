@@ -101,7 +101,7 @@ TEST(VehicleReplay, LocalizesTheDriveAtTheExpectedRates) {
     return 0;
   });
   {
-    // Every scan has a status, or was dropped (the matcher never queues more than one).
+    // Every scan has a status, or was dropped (the matcher's queue drains within the 3 s above).
     uint64_t dropped = 0, accepted = 0;
     for (const MatchStatus& s : st) {
       dropped += s.dropped_scans;

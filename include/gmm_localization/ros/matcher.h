@@ -45,6 +45,7 @@
 
 #include "gmm_localization/MapIndex.h"
 #include "gmm_localization/RasterChunk.h"
+#include "gmm_localization/core/drop_oldest_queue.h"
 #include "gmm_localization/core/localizer_pipeline.h"
 #include "gmm_localization/ros/diagnostics.h"
 #include "gmm_localization/ros/map_server_client.h"
@@ -104,10 +105,10 @@ class Matcher {
   MapServerClient map_client_;
   std::shared_ptr<const ChunkMap> map_snapshot_;
 
-  // The single-slot scan queue and the worker.
+  // The bounded scan queue (options_.scan_queue_size, oldest dropped when full) and the worker.
   std::mutex queue_mutex_;
   std::condition_variable queue_cv_;
-  sensor_msgs::PointCloud2::ConstPtr waiting_;
+  DropOldestQueue<sensor_msgs::PointCloud2::ConstPtr> waiting_{3};
   uint32_t dropped_since_status_ = 0;
   bool stop_ = false;
   std::thread worker_;

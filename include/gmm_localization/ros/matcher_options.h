@@ -29,6 +29,9 @@ struct MatcherOptions {
   double odometry_buffer_s = 10.0;      ///< INS history kept [s]
   double odometry_max_extrapolation_s = 0.3;
   double time_backwards_tolerance_s = 1.0;  ///< scan stamp regression that clears the state [s]
+  /// Scans waiting while one is matched, in arrival order; when full the oldest is dropped
+  /// (1: only the latest waits, the behaviour of a queue_size 1 subscriber).
+  int scan_queue_size = 3;
 
   /// Configured initial pose (unattended start): searched with its window at the first scan.
   bool initial_pose_enabled = false;
