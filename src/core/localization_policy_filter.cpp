@@ -39,6 +39,8 @@ std::string FilterPolicyOptions::validate() const {
         rangeProblem("unknown_z_sigma_m", unknown_z_sigma_m, 1e-3, 1000.0),
         rangeProblem("unknown_tilt_sigma_rad", unknown_tilt_sigma_rad, 1e-4, 3.2),
         rangeProblem("forward_jump_reset_count", forward_jump_reset_count, 1, 1e6),
+        rangeProblem("twist_linear_min_sigma_mps", twist_linear_min_sigma_mps, 0.0, 100.0),
+        rangeProblem("twist_linear_sigma_per_speed", twist_linear_sigma_per_speed, 0.0, 1.0),
         defaults.validate()}) {
     if (!e.empty()) return e;
   }
@@ -172,6 +174,12 @@ FuseReport LocalizationFilter::addTwist(TwistMeasurement twist) {
     twist.covariance.setZero();
     twist.covariance.diagonal() << Eigen::Vector3d::Constant(std::pow(d.twist_linear_sigma_mps, 2)),
         Eigen::Vector3d::Constant(std::pow(d.twist_angular_sigma_radps, 2));
+  }
+  for (int k = 0; k < 3; ++k) {  // a scale error grows with each axis' own speed
+    const double floor_var =
+        std::pow(options_.twist_linear_min_sigma_mps, 2) +
+        std::pow(options_.twist_linear_sigma_per_speed * twist.linear_mps(k), 2);
+    twist.covariance(k, k) = std::max(twist.covariance(k, k), floor_var);
   }
   const FuseReport r = ekf_.processTwist(twist);
   checkTime(r);

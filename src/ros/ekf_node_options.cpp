@@ -84,6 +84,10 @@ FilterPolicyOptions loadFilterPolicyOptions(const ParamSource& parent) {
       param(nh, "unknown_tilt_sigma_rad", o.unknown_tilt_sigma_rad, 1e-4, 3.2);
   o.forward_jump_reset_count =
       param(nh, "forward_jump_reset_count", o.forward_jump_reset_count, 1, 1000000);
+  o.twist_linear_min_sigma_mps =
+      param(nh, "twist_linear_min_sigma_mps", o.twist_linear_min_sigma_mps, 0.0, 100.0);
+  o.twist_linear_sigma_per_speed =
+      param(nh, "twist_linear_sigma_per_speed", o.twist_linear_sigma_per_speed, 0.0, 1.0);
   MeasurementDefaults& d = o.defaults;
   d.imu_orientation_sigma_rad =
       param(nh, "defaults/imu_orientation_sigma_rad", d.imu_orientation_sigma_rad, 1e-6, 10.0);
