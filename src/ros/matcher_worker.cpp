@@ -1,4 +1,4 @@
-// Matcher scan path: the single-slot intake, the worker thread and one scan's processing and
+// Matcher scan path: the bounded scan queue, the worker thread and one scan's processing and
 // publication (matcher.h).
 #include <cmath>
 #include <cstdio>
@@ -44,8 +44,10 @@ void Matcher::onScan(const sensor_msgs::PointCloud2::ConstPtr& msg) {
   {
     std::lock_guard<std::mutex> lock(queue_mutex_);
     // A slow match (the first, wide search) leaves a backlog that the tracking matches after it
-    // drain; beyond the queue's size the oldest scan goes.
-    const size_t dropped = waiting_.push(msg);
+    // drain; beyond the queue's size the oldest scan goes. After time went backwards, the
+    // waiting scans of the old timeline go too.
+    size_t dropped = jump > 0.0 ? waiting_.clear() : 0;
+    dropped += waiting_.push(msg);
     if (dropped > 0) {
       dropped_since_status_ += static_cast<uint32_t>(dropped);
       std::lock_guard<std::mutex> stats(stats_mutex_);

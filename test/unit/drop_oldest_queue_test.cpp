@@ -22,6 +22,11 @@ TEST(DropOldestQueue, KeepsArrivalOrderAndDropsTheOldestWhenFull) {
   EXPECT_EQ(q.pop(), 5);
   EXPECT_EQ(q.pop(), 6);
   EXPECT_TRUE(q.empty());
+  q.push(7);
+  q.push(8);
+  EXPECT_EQ(q.clear(), 2u);  // e.g. the scans of a timeline that time left behind
+  EXPECT_TRUE(q.empty());
+  EXPECT_EQ(q.droppedTotal(), 4u);
 }
 
 TEST(DropOldestQueue, CapacityOneKeepsOnlyTheNewest) {

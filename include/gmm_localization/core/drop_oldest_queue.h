@@ -27,6 +27,13 @@ class DropOldestQueue {
     dropped_total_ += dropped;
     return dropped;
   }
+  /// Drops every entry (counted like the others); returns how many.
+  size_t clear() {
+    const size_t dropped = items_.size();
+    items_.clear();
+    dropped_total_ += dropped;
+    return dropped;
+  }
   /// Removes and returns the oldest entry. Precondition: !empty().
   T pop() {
     T item = std::move(items_.front());
