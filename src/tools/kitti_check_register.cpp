@@ -15,6 +15,9 @@
 namespace gmm_localization {
 namespace kitti_check {
 
+using bench::angleDiff;
+using bench::yawOf;
+
 namespace {
 
 double now() {
@@ -28,10 +31,6 @@ double cpuNow() {
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
   return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
-
-double yawOf(const Eigen::Isometry3d& T) { return std::atan2(T.linear()(1, 0), T.linear()(0, 0)); }
-
-double angleDiff(double a, double b) { return std::atan2(std::sin(a - b), std::cos(a - b)); }
 
 /// Share of the scan's 0.2 m voxels (placed at the truth) over cells with a mixture.
 double overlapShare(const GmmMap& map, const Keyframe& k) {

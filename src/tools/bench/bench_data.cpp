@@ -141,6 +141,10 @@ Pose6 offsetPrior(const Eigen::Isometry3d& truth, double r_m, double h_rad, std:
   return p;
 }
 
+double yawOf(const Eigen::Isometry3d& T) { return std::atan2(T.linear()(1, 0), T.linear()(0, 0)); }
+
+double angleDiff(double a, double b) { return std::atan2(std::sin(a - b), std::cos(a - b)); }
+
 double median(std::vector<double> v) { return percentile(std::move(v), 50.0); }
 
 double percentile(std::vector<double> v, double p) {

@@ -46,6 +46,11 @@ Result<PointList> targetCloud(const std::string& mapping_dir, const Eigen::Vecto
 /// [rad] (the benchmark's and kitti_check's seeded offsets).
 Pose6 offsetPrior(const Eigen::Isometry3d& truth, double r_m, double h_rad, std::mt19937& rng);
 
+/// Heading of a pose [rad] and the signed difference a - b of two headings in (-pi, pi]: the
+/// error measures of the benchmark and kitti_check.
+double yawOf(const Eigen::Isometry3d& T);
+double angleDiff(double a, double b);
+
 double median(std::vector<double> v);
 double percentile(std::vector<double> v, double p);
 

@@ -128,9 +128,6 @@ bool parse(int argc, char** argv, Options& o) {
   return true;
 }
 
-double yawOf(const Eigen::Isometry3d& T) { return std::atan2(T.linear()(1, 0), T.linear()(0, 0)); }
-double angleDiff(double a, double b) { return std::atan2(std::sin(a - b), std::cos(a - b)); }
-
 struct WindowRow {
   std::string name;
   std::vector<double> filter_ms, search_ms, filter_search_ms, total_ms, fraction, error_m,
