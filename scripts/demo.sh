@@ -117,14 +117,9 @@ initial_pose_args() {
   /usr/bin/python3 "$GMM_REPO/scripts/initial_pose_args.py" "$1"
 }
 
-# A free TCP port for the replay's own master (never the default 11311 another master may hold).
-free_port() {
-  /usr/bin/python3 -c "import socket; s=socket.socket(); s.bind(('127.0.0.1', 0)); print(s.getsockname()[1])"
-}
-
 replay() {  # replay DATASET
   local ds="$1" port args
-  port=$(free_port)
+  port=$(gmm_free_port)
   args=$(initial_pose_args "$DEMO/$ds.bag")
   [ -n "$args" ] || fail "no /ground_truth/odom in $DEMO/$ds.bag"
   rm -f "$DEMO/replay_$ds.bag" "$DEMO/replay_$ds.bag.active"

@@ -18,3 +18,7 @@ gmm_source_ros() {
   [ "$had_u" = 1 ] && set -u
   return 0
 }
+# A free TCP port for a ROS master of our own (never the default 11311 another master may hold).
+gmm_free_port() {
+  /usr/bin/python3 -c "import socket; s=socket.socket(); s.bind(('127.0.0.1', 0)); print(s.getsockname()[1])"
+}

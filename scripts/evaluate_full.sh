@@ -56,7 +56,7 @@ done
 
 if [ "$REPLAY" = 1 ]; then
   for ds in downtown snowy; do
-    port=$(/usr/bin/python3 -c "import socket; s=socket.socket(); s.bind(('127.0.0.1', 0)); print(s.getsockname()[1])")
+    port=$(gmm_free_port)
     args=$(/usr/bin/python3 "$GMM_REPO/scripts/initial_pose_args.py" "$OUT/$ds.bag")
     # shellcheck disable=SC2086
     ROS_MASTER_URI="http://localhost:$port" ROS_LOG_DIR="$OUT/ros_logs" \
