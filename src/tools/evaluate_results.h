@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -63,6 +64,13 @@ struct ObstacleStats {
   /// Recall per true label: 1 (dynamic or changed), 2 (snow).
   std::array<uint64_t, 3> positives_by_label{}, detected_by_label{};
   uint64_t scans = 0;
+
+  /// Share of the points of true label `label` (1 or 2) labelled obstacle; NaN without any.
+  double labelRecall(int label) const {
+    return positives_by_label[label] ? static_cast<double>(detected_by_label[label]) /
+                                           static_cast<double>(positives_by_label[label])
+                                     : std::numeric_limits<double>::quiet_NaN();
+  }
 };
 
 /// The run's context for the summary.

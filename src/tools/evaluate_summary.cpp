@@ -193,13 +193,8 @@ std::string summaryJson(const EvaluationResults& r, const Summary& s) {
     for (size_t k = 0; k < ob.by_range.size(); ++k) {
       o << (k ? ", " : "") << confusionJson(ob.by_range[k]);
     }
-    o << "], \"recall_label_1\": "
-      << num(ob.positives_by_label[1] ? double(ob.detected_by_label[1]) / ob.positives_by_label[1]
-                                      : NAN)
-      << ", \"recall_label_2\": "
-      << num(ob.positives_by_label[2] ? double(ob.detected_by_label[2]) / ob.positives_by_label[2]
-                                      : NAN)
-      << "}";
+    o << "], \"recall_label_1\": " << num(ob.labelRecall(1))
+      << ", \"recall_label_2\": " << num(ob.labelRecall(2)) << "}";
   }
   o << ",\n  \"paper\": {\"rms_longitudinal_m\": " << num(paper[0])
     << ", \"rms_lateral_m\": " << num(paper[1]) << ", \"match_rate_hz\": \"3-4\"}"
@@ -279,13 +274,8 @@ std::string summaryMarkdown(const EvaluationResults& r, const Summary& s) {
       o << (k ? ", " : " ") << bins[k] << " P " << pct(ob.by_range[k].precision()) << " R "
         << pct(ob.by_range[k].recall());
     }
-    o << "; recall of label 1 (dynamic/changed) "
-      << pct(ob.positives_by_label[1] ? double(ob.detected_by_label[1]) / ob.positives_by_label[1]
-                                      : NAN)
-      << ", label 2 (snow) "
-      << pct(ob.positives_by_label[2] ? double(ob.detected_by_label[2]) / ob.positives_by_label[2]
-                                      : NAN)
-      << ".\n\n";
+    o << "; recall of label 1 (dynamic/changed) " << pct(ob.labelRecall(1)) << ", label 2 (snow) "
+      << pct(ob.labelRecall(2)) << ".\n\n";
   }
   for (const std::string& n : i.notes) o << "Note: " << n << "\n\n";
   return o.str();
