@@ -58,10 +58,10 @@ struct FilterPolicyOptions {
   /// Consecutive kTimeJumpedForward reports after which the filter stops and waits.
   int forward_jump_reset_count = 3;
   MeasurementDefaults defaults;
-  /// Floor of the INS linear-twist standard deviation, per axis: sqrt(min^2 + (per_speed *
-  /// |v|)^2). An INS reports millimetres per second but carries a scale error of a few tenths
-  /// of a percent; trusted as reported, the filter integrates that bias between matches and
-  /// runs ahead of them at speed. 0, 0: the reported covariance as is.
+  /// Floor of the INS linear-twist standard deviation, per axis k: sqrt(min^2 + (per_speed *
+  /// v_k)^2), v_k the twist's own speed along k. An INS reports millimetres per second but carries
+  /// a scale error of a few tenths of a percent; trusted as reported, the filter integrates that
+  /// bias between matches and runs ahead of them at speed. 0, 0: the reported covariance as is.
   double twist_linear_min_sigma_mps = 0.0;
   double twist_linear_sigma_per_speed = 0.0;
 
