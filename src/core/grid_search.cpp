@@ -1,6 +1,7 @@
 #include "gmm_localization/core/grid_search.h"
 
 #include <queue>
+#include <vector>
 
 namespace gmm_localization {
 namespace {
@@ -104,12 +105,28 @@ SearchOutcome branchAndBoundSearch(const SearchProblem& problem,
     stats.queue_peak = std::max<int64_t>(stats.queue_peak, static_cast<int64_t>(queue.size()));
   };
 
-  // Exhaustive over the coarsest layer (Algorithm 3, lines 5-17).
+  // Exhaustive over the coarsest layer (Algorithm 3, lines 5-17), four nodes per pass over the
+  // points, then queued in (heading, ty, tx) order.
   const int stride = 1 << top;
+  const int nx = (w.sizeX() + stride - 1) / stride, ny = (w.sizeY() + stride - 1) / stride;
+  std::vector<int64_t> top_scores(static_cast<size_t>(nx) * ny);
   for (int j = 0; j < w.sizeH(); ++j) {
-    for (int ty = 0; ty < w.sizeY(); ty += stride) {
-      for (int tx = 0; tx < w.sizeX(); tx += stride) {
-        push({evaluate(j, top, tx, ty), j, ty, tx, top});
+    for (int by = 0; by < ny; by += 2) {
+      for (int bx = 0; bx < nx; bx += 2) {
+        int64_t quad[4];
+        problem.scoreQuad(j, top, bx * stride, by * stride, stride, quad);
+        for (int dy = 0; dy < 2 && by + dy < ny; ++dy) {
+          for (int dx = 0; dx < 2 && bx + dx < nx; ++dx) {
+            top_scores[static_cast<size_t>(by + dy) * nx + bx + dx] = quad[dy * 2 + dx];
+          }
+        }
+      }
+    }
+    for (int by = 0; by < ny; ++by) {
+      for (int bx = 0; bx < nx; ++bx) {
+        const int64_t s = top_scores[static_cast<size_t>(by) * nx + bx];
+        record(j, top, bx * stride, by * stride, s);
+        push({s, j, by * stride, bx * stride, top});
       }
     }
   }

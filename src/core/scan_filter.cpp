@@ -13,6 +13,60 @@ namespace gmm_localization {
 
 namespace {
 constexpr uint64_t kMask31 = (uint64_t{1} << 31) - 1;
+
+/// Voxel centroids, accumulated point by point. Voxel keys of 21 bits per axis (+-200 km at
+/// 0.2 m) are numbered in first-seen order, so the output order is deterministic. Each voxel
+/// sums its points' float offsets from its first point (small numbers: no precision lost to large
+/// coordinates) in one 32-byte record. Scans arrive ring by ring, so consecutive points often
+/// share a voxel: the last key is checked before the table.
+class VoxelAccumulator {
+ public:
+  VoxelAccumulator(double voxel_m, size_t expected_voxels)
+      : inv_(1.0 / voxel_m), index_(expected_voxels) {
+    sums_.reserve(expected_voxels);
+  }
+
+  void add(const Eigen::Vector3f& p) {
+    const int64_t fx = floorToInt(p.x() * inv_), fy = floorToInt(p.y() * inv_),
+                  fz = floorToInt(p.z() * inv_);
+    const uint64_t key = ((static_cast<uint64_t>(fx + kOffset) & kMask) << 42) |
+                         ((static_cast<uint64_t>(fy + kOffset) & kMask) << 21) |
+                         (static_cast<uint64_t>(fz + kOffset) & kMask);
+    if (key != last_key_) {
+      bool inserted = false;
+      last_ = index_.insert(key, inserted);
+      last_key_ = key;
+      if (inserted) sums_.push_back({p, Eigen::Vector3f::Zero(), 0u});
+    }
+    Sum& s = sums_[last_];
+    s.offsets += p - s.first;
+    ++s.n;
+  }
+
+  PointList centroids() const {
+    PointList out(sums_.size());
+    for (size_t i = 0; i < sums_.size(); ++i) {
+      const Sum& s = sums_[i];
+      out[i] = s.first + s.offsets / static_cast<float>(s.n);
+    }
+    return out;
+  }
+
+ private:
+  struct Sum {
+    Eigen::Vector3f first;    ///< the voxel's first point
+    Eigen::Vector3f offsets;  ///< sum of (point - first)
+    uint32_t n;
+  };
+  static constexpr int64_t kOffset = int64_t{1} << 20;
+  static constexpr uint64_t kMask = (uint64_t{1} << 21) - 1;
+
+  double inv_;
+  KeyIndex index_;
+  std::vector<Sum> sums_;
+  uint64_t last_key_ = ~uint64_t{0};
+  uint32_t last_ = 0;
+};
 }  // namespace
 
 std::string ScanFilterOptions::validate() const {
@@ -46,8 +100,12 @@ FilteredScan filterScan(const PointList& base_points, double roll_rad, double pi
                                     .cast<float>();
   const float r_min2 = static_cast<float>(options.min_range_m * options.min_range_m);
   const float r_max2 = static_cast<float>(options.max_range_m * options.max_range_m);
+  // One pass: level, filter, and (with voxel_m > 0) accumulate voxels without a copy of the
+  // kept points.
+  const bool voxelize = options.voxel_m > 0.0;
+  VoxelAccumulator voxels(voxelize ? options.voxel_m : 1.0, voxelize ? base_points.size() / 8 : 0);
   PointList kept;
-  kept.reserve(base_points.size());
+  if (!voxelize) kept.reserve(base_points.size());
   for (const Eigen::Vector3f& p : base_points) {
     if (!p.allFinite()) {
       ++out.dropped_nonfinite;
@@ -63,9 +121,13 @@ FilteredScan filterScan(const PointList& base_points, double roll_rad, double pi
       ++out.dropped_height;
       continue;
     }
-    kept.push_back(q);
+    if (voxelize) {
+      voxels.add(q);
+    } else {
+      kept.push_back(q);
+    }
   }
-  out.voxels = options.voxel_m > 0.0 ? voxelDownsample(kept, options.voxel_m) : std::move(kept);
+  out.voxels = voxelize ? voxels.centroids() : std::move(kept);
   if (options.max_points == 0 || out.voxels.size() <= options.max_points) {
     out.points = out.voxels;
     return out;
@@ -127,37 +189,9 @@ PointList selectSearchPoints(const PointList& pts, const std::vector<bool>& grou
 }
 
 PointList voxelDownsample(const PointList& points, double voxel_m) {
-  // Voxel keys of 21 bits per axis (+-200 km at 0.2 m) numbered in first-seen order, so the
-  // output order is deterministic; centroids accumulate in double. Scans arrive ring by ring,
-  // so consecutive points often share a voxel: the last key is checked before the table.
-  const double inv = 1.0 / voxel_m;
-  constexpr int64_t kOffset = int64_t{1} << 20;
-  constexpr uint64_t kMask = (uint64_t{1} << 21) - 1;
-  KeyIndex voxels(points.size() / 4);
-  std::vector<Eigen::Vector3d> sum;
-  std::vector<uint32_t> count;
-  uint64_t last_key = ~uint64_t{0};
-  uint32_t last = 0;
-  for (const Eigen::Vector3f& p : points) {
-    const uint64_t ix = static_cast<uint64_t>(floorToInt(p.x() * inv) + kOffset) & kMask;
-    const uint64_t iy = static_cast<uint64_t>(floorToInt(p.y() * inv) + kOffset) & kMask;
-    const uint64_t iz = static_cast<uint64_t>(floorToInt(p.z() * inv) + kOffset) & kMask;
-    const uint64_t key = (ix << 42) | (iy << 21) | iz;
-    if (key != last_key) {
-      bool inserted = false;
-      last = voxels.insert(key, inserted);
-      last_key = key;
-      if (inserted) {
-        sum.emplace_back(Eigen::Vector3d::Zero());
-        count.push_back(0);
-      }
-    }
-    sum[last] += p.cast<double>();
-    ++count[last];
-  }
-  PointList out(sum.size());
-  for (size_t i = 0; i < sum.size(); ++i) out[i] = (sum[i] / count[i]).cast<float>();
-  return out;
+  VoxelAccumulator voxels(voxel_m, points.size() / 8);
+  for (const Eigen::Vector3f& p : points) voxels.add(p);
+  return voxels.centroids();
 }
 
 bool deskew(PointList& points, const std::vector<float>& time_s, const Eigen::Vector3d& v,

@@ -84,6 +84,36 @@ TEST(GridSearch, BranchAndBoundEqualsExhaustiveOnRandomCases) {
   }
 }
 
+TEST(GridSearch, BranchAndBoundEqualsExhaustiveWhenTheTopLayerIsCapped) {
+  // Few layers: the coarsest layer tiles the window with many nodes (odd counts included),
+  // scored four at a time.
+  const GmmMap map = testing::randomMap(6, geometry(), -2, -2, 4, 4, 0.35);
+  RasterOptions o;
+  o.chunk_shift = 5;
+  o.num_layers = 2;
+  const ChunkMap chunks = rasterize(map, o);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int c = 0; c < 30; ++c) {
+    Pose6 prior;
+    prior.x = -10.0 + 20.0 * u(rng);
+    prior.y = -10.0 + 20.0 * u(rng);
+    prior.yaw = 6.28 * u(rng);
+    const SearchWindow w = SearchWindow::fromExtent(prior, 1.0 + 2.0 * u(rng), 1.0 + 2.0 * u(rng),
+                                                    0.05 * u(rng), 0.02, 0.2);
+    const PointList pts = randomPoints(rng, 20 + static_cast<int>(200 * u(rng)), 4.0);
+    auto problem = SearchProblem::create(chunks, pts, w);
+    ASSERT_TRUE(problem.ok()) << problem.error();
+    ASSERT_EQ(problem->topLayer(), 2);
+    const SearchOutcome ex = exhaustiveSearch(problem.value());
+    const SearchOutcome bb = branchAndBoundSearch(problem.value(), {c % 2 == 0});
+    expectSame(ex, bb, c);
+    const int64_t top_nodes = ((w.sizeX() + 3) / 4) * ((w.sizeY() + 3) / 4) * w.sizeH();
+    EXPECT_GT(top_nodes, 4 * w.sizeH()) << "case " << c << ": more than a 2 x 2 top grid";
+    EXPECT_EQ(bb.stats.evaluations_per_layer[2], top_nodes) << "case " << c;
+  }
+}
+
 TEST(GridSearch, TiesResolveIdenticallyOnAUniformMap) {
   // Every cell holds the same mixture: all translations of a heading tie exactly.
   MapGeometry g = geometry();
