@@ -45,6 +45,22 @@ PointList randomPoints(std::mt19937& rng, int n, double radius) {
   return pts;
 }
 
+/// A window around a uniform random prior in [-xy, xy]^2 (z in [0, z_max), any heading), with
+/// half extents in [half_min, half_min + half_span) [m] and half heading below heading_max.
+SearchWindow randomWindow(std::mt19937& rng, double xy, double z_max, double half_min,
+                          double half_span, double heading_max) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Pose6 prior;
+  prior.x = -xy + 2.0 * xy * u(rng);
+  prior.y = -xy + 2.0 * xy * u(rng);
+  prior.z = z_max * u(rng);
+  prior.yaw = 6.28 * u(rng);
+  const double half_x = half_min + half_span * u(rng);
+  const double half_y = half_min + half_span * u(rng);
+  const double half_heading = heading_max * u(rng);
+  return SearchWindow::fromExtent(prior, half_x, half_y, half_heading, 0.02, 0.2);
+}
+
 void expectSame(const SearchOutcome& a, const SearchOutcome& b, int c) {
   EXPECT_EQ(a.score, b.score) << "case " << c;
   EXPECT_EQ(a.heading_index, b.heading_index) << "case " << c;
@@ -63,13 +79,8 @@ TEST(GridSearch, BranchAndBoundEqualsExhaustiveOnRandomCases) {
     std::mt19937 rng(100 + coarsen);
     std::uniform_real_distribution<double> u(0.0, 1.0);
     for (int c = 0; c < 60; ++c) {
-      Pose6 prior;
-      prior.x = -12.0 + 24.0 * u(rng);  // windows straddle tile (8 m) and chunk (6.4 m) borders
-      prior.y = -12.0 + 24.0 * u(rng);
-      prior.z = 1.0 * u(rng);
-      prior.yaw = 6.28 * u(rng);
-      const SearchWindow w = SearchWindow::fromExtent(prior, 0.4 + 2.6 * u(rng), 0.4 + 2.6 * u(rng),
-                                                      0.1 * u(rng), 0.02, 0.2);
+      // Windows straddle tile (8 m) and chunk (6.4 m) borders.
+      const SearchWindow w = randomWindow(rng, 12.0, 1.0, 0.4, 2.6, 0.1);
       const PointList pts = randomPoints(rng, 5 + static_cast<int>(300 * u(rng)), 4.0);
       auto problem = SearchProblem::create(chunks, pts, w);
       ASSERT_TRUE(problem.ok()) << problem.error();
@@ -95,12 +106,7 @@ TEST(GridSearch, BranchAndBoundEqualsExhaustiveWhenTheTopLayerIsCapped) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   for (int c = 0; c < 30; ++c) {
-    Pose6 prior;
-    prior.x = -10.0 + 20.0 * u(rng);
-    prior.y = -10.0 + 20.0 * u(rng);
-    prior.yaw = 6.28 * u(rng);
-    const SearchWindow w = SearchWindow::fromExtent(prior, 1.0 + 2.0 * u(rng), 1.0 + 2.0 * u(rng),
-                                                    0.05 * u(rng), 0.02, 0.2);
+    const SearchWindow w = randomWindow(rng, 10.0, 0.0, 1.0, 2.0, 0.05);
     const PointList pts = randomPoints(rng, 20 + static_cast<int>(200 * u(rng)), 4.0);
     auto problem = SearchProblem::create(chunks, pts, w);
     ASSERT_TRUE(problem.ok()) << problem.error();
