@@ -112,8 +112,15 @@ TEST(GridSearch, BranchAndBoundEqualsExhaustiveWhenTheTopLayerIsCapped) {
     ASSERT_TRUE(problem.ok()) << problem.error();
     ASSERT_EQ(problem->topLayer(), 2);
     const SearchOutcome ex = exhaustiveSearch(problem.value());
-    const SearchOutcome bb = branchAndBoundSearch(problem.value(), {c % 2 == 0});
+    std::vector<TraversalNode> traversal;
+    const SearchOutcome bb = branchAndBoundSearch(problem.value(), {c % 2 == 0}, &traversal);
     expectSame(ex, bb, c);
+    // Every bound the search used, the coarsest layer's four-at-a-time ones included, is the
+    // node's own score.
+    for (const TraversalNode& n : traversal) {
+      ASSERT_EQ(n.bound, problem->score(n.heading_index, n.layer, n.tx, n.ty))
+          << "case " << c << ", layer " << n.layer << " node (" << n.tx << ", " << n.ty << ")";
+    }
     const int64_t top_nodes = ((w.sizeX() + 3) / 4) * ((w.sizeY() + 3) / 4) * w.sizeH();
     EXPECT_GT(top_nodes, 4 * w.sizeH()) << "case " << c << ": more than a 2 x 2 top grid";
     EXPECT_EQ(bb.stats.evaluations_per_layer[2], top_nodes) << "case " << c;
