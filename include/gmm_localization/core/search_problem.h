@@ -96,7 +96,7 @@ class SearchProblem {
   int numHeadings() const { return static_cast<int>(rotated_.size()); }
   /// Scan points per heading before merging (the n of the log-likelihood).
   int64_t scanPoints() const { return scan_points_; }
-  /// Coarsest layer used: the smallest that covers the window in at most a 2 x 2 block grid,
+  /// Coarsest layer used: the smallest that covers the window in at most a 4 x 4 block grid,
   /// capped by the layers the map holds.
   int topLayer() const { return top_layer_; }
 
