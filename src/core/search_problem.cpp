@@ -172,16 +172,23 @@ Result<SearchProblem> SearchProblem::create(const ChunkMap& map, const PointList
     }
   }
 
-  int top = 0;
-  // The coarsest layer tiles the window with at most 4 x 4 nodes per heading. Scored heading by
-  // heading, four nodes per pass, those reads stay in cache; a coarser start (2 x 2) saves
-  // evaluations but its best-first descent then jumps between headings and runs slower
-  // (paper window 67-72 against 53-58 ms, tracking window unchanged; README, Registration).
-  constexpr int kMaxTopGrid = 4;
-  while (top < ro.num_layers &&
-         kMaxTopGrid * (1 << top) < std::max(window.sizeX(), window.sizeY())) {
-    ++top;
-  }
+  // The coarsest layer, searched exhaustively (Algorithm 3), is the smallest that covers the
+  // window in a 4 x 4 node grid per heading, or in a 2 x 2 grid if that is no coarser than
+  // layer kPruningLayer. Layers above it (blocks over 16 x 16 cells) bound so loosely that
+  // nearly every node is expanded anyway, and a best-first descent from them jumps between
+  // headings, out of cache, while the exhaustive top layer is scored heading by heading, four
+  // nodes per pass. Measured on the simulated Downtown scans: paper window (125 cells) from
+  // layer 5, 4 x 4, search 53-58 ms against 67-72 ms from layer 6, 2 x 2, and 99 ms from
+  // layer 4, 8 x 8; tracking window (21 cells) from layer 4, 2 x 2, 8.0 against 9.0 ms from
+  // layer 3, 3 x 3.
+  constexpr int kPruningLayer = 4;
+  const int size = std::max(window.sizeX(), window.sizeY());
+  auto covering = [&](int grid) {
+    int layer = 0;
+    while (layer < ro.num_layers && grid * (1 << layer) < size) ++layer;
+    return layer;
+  };
+  const int top = std::max(covering(4), std::min(covering(2), kPruningLayer));
   // Node blocks of layer `top` starting inside the window reach 2^top - 1 cells beyond it.
   const int64_t reach = (int64_t{1} << top) - 1;
   RasterWindow raster(map, gx_min, gy_min, gx_max + window.sizeX() - 1 + reach,

@@ -97,7 +97,7 @@ class SearchProblem {
   /// Scan points per heading before merging (the n of the log-likelihood).
   int64_t scanPoints() const { return scan_points_; }
   /// Coarsest layer used: the smallest that covers the window in at most a 4 x 4 block grid,
-  /// capped by the layers the map holds.
+  /// or in a 2 x 2 grid when that is layer 4 or finer; capped by the layers the map holds.
   int topLayer() const { return top_layer_; }
 
   /// Score (sum of layer values over points) of node (j, layer, tx, ty).
