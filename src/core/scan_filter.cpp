@@ -17,7 +17,7 @@ constexpr uint64_t kMask31 = (uint64_t{1} << 31) - 1;
 /// Voxel centroids, accumulated point by point. Voxel keys of 21 bits per axis (+-200 km at
 /// 0.2 m) are numbered in first-seen order, so the output order is deterministic. Each voxel
 /// sums its points' float offsets from its first point (small numbers: no precision lost to large
-/// coordinates) in one 32-byte record. Scans arrive ring by ring, so consecutive points often
+/// coordinates) in one 28-byte record. Scans arrive ring by ring, so consecutive points often
 /// share a voxel: the last key is checked before the table.
 class VoxelAccumulator {
  public:
