@@ -1,7 +1,7 @@
 # gmm_core: the ROS-free core. It gets Eigen, zlib and threads only; the target links with
 # --no-undefined, so any use of a ROS or PCL symbol fails to link, and scripts/check_core_deps.sh
 # (run by the test command) rejects ROS/PCL includes under core/ and sim/.
-file(GLOB GMM_CORE_SOURCES CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/src/core/*.cpp)
+file(GLOB_RECURSE GMM_CORE_SOURCES CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/src/core/*.cpp)
 add_library(gmm_core SHARED ${GMM_CORE_SOURCES})
 target_include_directories(gmm_core PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/include)
 target_link_libraries(gmm_core PUBLIC Eigen3::Eigen ZLIB::ZLIB Threads::Threads)

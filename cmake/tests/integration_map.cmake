@@ -6,6 +6,7 @@ find_package(roslaunch REQUIRED)
 add_rostest_gtest(rostest_map_server test/integration/map_server.test
   test/integration/map_server_test_node.cpp)
 target_link_libraries(rostest_map_server gmm_ros)
+target_include_directories(rostest_map_server PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/test/unit)
 add_dependencies(rostest_map_server gmm_map_server_nodelet)
 
 add_rostest_gtest(rostest_cloud_merger test/integration/cloud_merger.test

@@ -1,6 +1,6 @@
 # One gtest binary per test file under test/unit (core and simulator, no ROS master).
 # sim_*_test.cpp link the simulator too; the others only the core.
-file(GLOB GMM_UNIT_TESTS CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/test/unit/*_test.cpp)
+file(GLOB_RECURSE GMM_UNIT_TESTS CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/test/unit/*_test.cpp)
 foreach(test_source ${GMM_UNIT_TESTS})
   get_filename_component(test_name ${test_source} NAME_WE)
   catkin_add_gtest(unit_${test_name} ${test_source}

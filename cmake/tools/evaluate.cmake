@@ -4,29 +4,29 @@
 find_package(yaml-cpp REQUIRED)
 
 add_library(gmm_evaluate STATIC
-  src/tools/evaluate_bag.cpp
-  src/tools/evaluate_localize.cpp
-  src/tools/evaluate_map.cpp
-  src/tools/evaluate_metrics.cpp
-  src/tools/evaluate_offsets.cpp
-  src/tools/evaluate_options.cpp
-  src/tools/evaluate_recorded.cpp
-  src/tools/evaluate_report.cpp
-  src/tools/evaluate_summary.cpp
-  src/tools/evaluate_yaml.cpp)
+  src/tools/evaluate/evaluate_bag.cpp
+  src/tools/evaluate/evaluate_localize.cpp
+  src/tools/evaluate/evaluate_map.cpp
+  src/tools/evaluate/evaluate_metrics.cpp
+  src/tools/evaluate/evaluate_offsets.cpp
+  src/tools/evaluate/evaluate_options.cpp
+  src/tools/evaluate/evaluate_recorded.cpp
+  src/tools/evaluate/evaluate_report.cpp
+  src/tools/evaluate/evaluate_summary.cpp
+  src/tools/evaluate/evaluate_yaml.cpp)
 target_include_directories(gmm_evaluate PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/src/tools)
 target_link_libraries(gmm_evaluate PUBLIC gmm_ros yaml-cpp Threads::Threads)
 # The package's config/ directory is the default for --config-dir.
 target_compile_definitions(gmm_evaluate PRIVATE
   GMM_CONFIG_DIR="${CMAKE_CURRENT_SOURCE_DIR}/config")
 
-gmm_add_tool(evaluate SOURCES src/tools/evaluate.cpp LIBS gmm_evaluate)
+gmm_add_tool(evaluate SOURCES src/tools/evaluate/evaluate.cpp LIBS gmm_evaluate)
 target_compile_definitions(evaluate PRIVATE GMM_CONFIG_DIR="${CMAKE_CURRENT_SOURCE_DIR}/config")
 
 if(CATKIN_ENABLE_TESTING)
   # The evaluation maths and the YAML parameter source (no master, no bag).
   foreach(test_name evaluate_metrics_test evaluate_params_test)
-    catkin_add_gtest(tools_${test_name} test/tools/${test_name}.cpp
+    catkin_add_gtest(tools_${test_name} test/tools/evaluate/${test_name}.cpp
       WORKING_DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR})
     target_link_libraries(tools_${test_name} gmm_evaluate gtest_main)
     target_compile_definitions(tools_${test_name} PRIVATE

@@ -4,7 +4,7 @@
 
 #include <tf2_eigen/tf2_eigen.h>
 
-#include "gmm_localization/core/exact_scorer.h"
+#include "gmm_localization/core/common/types.h"
 #include "gmm_localization/ros/pose_conversion.h"
 
 namespace gmm_localization {

@@ -1,7 +1,7 @@
 // Matcher inputs other than scans: INS odometry, EKF posterior, initial pose, map (matcher.h).
 #include <cmath>
 
-#include "gmm_localization/core/exact_scorer.h"
+#include "gmm_localization/core/common/types.h"
 #include "gmm_localization/ros/ekf_node_conversions.h"
 #include "gmm_localization/ros/matcher.h"
 #include "gmm_localization/ros/pose_conversion.h"

@@ -7,7 +7,7 @@
 #include <sensor_msgs/image_encodings.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
 
-#include "gmm_localization/core/exact_scorer.h"
+#include "gmm_localization/core/common/types.h"
 #include "gmm_localization/ros/pose_conversion.h"
 
 namespace gmm_localization {

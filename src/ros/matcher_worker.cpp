@@ -150,12 +150,8 @@ void Matcher::processScan(const sensor_msgs::PointCloud2::ConstPtr& msg, uint32_
       report.outcome = MatchOutcome::kSkipped;
       report.reason = "discarded: time went backwards during the match";
     } else if (report.outcome == MatchOutcome::kAccepted) {
-      Eigen::Matrix3d xyh;
-      const int idx[3] = {kStateX, kStateY, kStateYaw};
-      for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 3; ++j) xyh(i, j) = report.covariance(idx[i], idx[j]);
-      }
-      tracker_.onAccepted(report.stamp_s, report.pose, xyh, report.prior);
+      tracker_.onAccepted(report.stamp_s, report.pose, planarCovariance(report.covariance),
+                          report.prior);
     } else if (report.outcome == MatchOutcome::kRejected) {
       tracker_.onRejected();
     }

@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "gmm_localization/core/exact_scorer.h"
+#include "gmm_localization/core/common/types.h"
 
 namespace gmm_localization {
 namespace node {

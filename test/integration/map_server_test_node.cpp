@@ -23,12 +23,12 @@
 #include <sensor_msgs/PointCloud2.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 
-#include "../ros/map_server_test_map.h"
 #include "gmm_localization/LoadMap.h"
-#include "gmm_localization/core/map_store.h"
-#include "gmm_localization/core/rasterizer.h"
+#include "gmm_localization/core/map/map_store.h"
+#include "gmm_localization/core/raster/chunk_planner.h"
+#include "gmm_localization/core/raster/rasterizer.h"
 #include "gmm_localization/ros/map_server_client.h"
-#include "gmm_localization/ros/map_server_planner.h"
+#include "support/test_map.h"
 
 namespace gmm_localization {
 namespace node {

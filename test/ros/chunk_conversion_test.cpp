@@ -9,7 +9,7 @@
 #include <gtest/gtest.h>
 #include <boost/make_shared.hpp>
 
-#include "gmm_localization/core/rasterizer.h"
+#include "gmm_localization/core/raster/rasterizer.h"
 
 namespace gmm_localization {
 namespace node {

@@ -8,7 +8,7 @@
 
 #include <gtest/gtest.h>
 
-#include "gmm_localization/core/exact_scorer.h"
+#include "gmm_localization/core/common/types.h"
 #include "gmm_localization/ros/pose_conversion.h"
 
 namespace gmm_localization {

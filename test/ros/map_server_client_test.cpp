@@ -5,7 +5,7 @@
 #include <gtest/gtest.h>
 #include <boost/make_shared.hpp>
 
-#include "gmm_localization/core/rasterizer.h"
+#include "gmm_localization/core/raster/rasterizer.h"
 #include "gmm_localization/ros/chunk_conversion.h"
 
 namespace gmm_localization {

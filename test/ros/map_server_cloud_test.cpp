@@ -6,7 +6,7 @@
 
 #include <gtest/gtest.h>
 
-#include "gmm_localization/core/rasterizer.h"
+#include "gmm_localization/core/raster/rasterizer.h"
 
 namespace gmm_localization {
 namespace node {

@@ -8,8 +8,8 @@
 #include <ros/time.h>
 
 #include "gmm_localization/RasterChunk.h"
-#include "gmm_localization/core/map_chunk.h"
-#include "gmm_localization/core/result.h"
+#include "gmm_localization/core/common/result.h"
+#include "gmm_localization/core/raster/map_chunk.h"
 
 namespace gmm_localization {
 namespace node {

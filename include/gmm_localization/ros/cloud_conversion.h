@@ -7,8 +7,8 @@
 
 #include <sensor_msgs/PointCloud2.h>
 
-#include "gmm_localization/core/result.h"
-#include "gmm_localization/core/scan_filter.h"
+#include "gmm_localization/core/common/result.h"
+#include "gmm_localization/core/matching/scan_filter.h"
 
 namespace gmm_localization {
 namespace node {

@@ -41,8 +41,8 @@
 #include <tf2_ros/transform_broadcaster.h>
 #include <tf2_ros/transform_listener.h>
 
-#include "gmm_localization/core/localization_policy_filter.h"
-#include "gmm_localization/core/localization_policy_prior.h"
+#include "gmm_localization/core/localization/localization_filter.h"
+#include "gmm_localization/core/localization/prior_tracker.h"
 #include "gmm_localization/ros/diagnostics.h"
 #include "gmm_localization/ros/ekf_node_options.h"
 

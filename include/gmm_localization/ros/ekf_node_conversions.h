@@ -15,9 +15,9 @@
 #include <tf2_ros/buffer.h>
 #include <Eigen/Geometry>
 
-#include "gmm_localization/core/ekf_measurement.h"
-#include "gmm_localization/core/localization_policy_prior.h"
-#include "gmm_localization/core/result.h"
+#include "gmm_localization/core/common/result.h"
+#include "gmm_localization/core/filter/ekf_measurement.h"
+#include "gmm_localization/core/localization/prior_tracker.h"
 
 namespace gmm_localization {
 namespace node {

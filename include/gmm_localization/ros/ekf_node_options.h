@@ -9,7 +9,7 @@
 
 #include <ros/ros.h>
 
-#include "gmm_localization/core/localization_policy_filter.h"
+#include "gmm_localization/core/localization/localization_filter.h"
 #include "gmm_localization/ros/params.h"
 
 namespace gmm_localization {

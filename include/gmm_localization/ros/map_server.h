@@ -51,8 +51,8 @@
 #include "gmm_localization/LoadMap.h"
 #include "gmm_localization/MapIndex.h"
 #include "gmm_localization/RasterChunk.h"
+#include "gmm_localization/core/raster/chunk_engine.h"
 #include "gmm_localization/ros/diagnostics.h"
-#include "gmm_localization/ros/map_server_engine.h"
 #include "gmm_localization/ros/map_server_options.h"
 
 namespace gmm_localization {

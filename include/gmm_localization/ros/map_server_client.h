@@ -23,9 +23,9 @@
 
 #include "gmm_localization/MapIndex.h"
 #include "gmm_localization/RasterChunk.h"
-#include "gmm_localization/core/chunk_map.h"
-#include "gmm_localization/core/map_geometry.h"
-#include "gmm_localization/core/raster_options.h"
+#include "gmm_localization/core/map/map_geometry.h"
+#include "gmm_localization/core/raster/chunk_map.h"
+#include "gmm_localization/core/raster/raster_options.h"
 
 namespace gmm_localization {
 namespace node {

@@ -5,10 +5,10 @@
 
 #include <vector>
 
-#include "gmm_localization/core/map_chunk.h"
-#include "gmm_localization/core/map_geometry.h"
+#include "gmm_localization/core/map/map_geometry.h"
+#include "gmm_localization/core/raster/chunk_planner.h"
+#include "gmm_localization/core/raster/map_chunk.h"
 #include "gmm_localization/ros/cloud_conversion.h"
-#include "gmm_localization/ros/map_server_planner.h"
 
 namespace gmm_localization {
 namespace node {

@@ -7,8 +7,8 @@
 
 #include <ros/node_handle.h>
 
-#include "gmm_localization/ros/map_server_engine.h"
-#include "gmm_localization/ros/map_server_planner.h"
+#include "gmm_localization/core/raster/chunk_engine.h"
+#include "gmm_localization/core/raster/chunk_planner.h"
 #include "gmm_localization/ros/params.h"
 
 namespace gmm_localization {

@@ -45,8 +45,8 @@
 
 #include "gmm_localization/MapIndex.h"
 #include "gmm_localization/RasterChunk.h"
-#include "gmm_localization/core/drop_oldest_queue.h"
-#include "gmm_localization/core/localizer_pipeline.h"
+#include "gmm_localization/core/common/drop_oldest_queue.h"
+#include "gmm_localization/core/localization/localizer_pipeline.h"
 #include "gmm_localization/ros/diagnostics.h"
 #include "gmm_localization/ros/map_server_client.h"
 #include "gmm_localization/ros/matcher_options.h"

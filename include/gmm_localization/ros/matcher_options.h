@@ -8,10 +8,10 @@
 
 #include <ros/ros.h>
 
-#include "gmm_localization/core/localization_policy.h"
-#include "gmm_localization/core/localizer_pipeline.h"
-#include "gmm_localization/core/localizer_pipeline_traversal.h"
-#include "gmm_localization/core/registration.h"
+#include "gmm_localization/core/localization/localizer_pipeline.h"
+#include "gmm_localization/core/localization/match_policy.h"
+#include "gmm_localization/core/matching/registration.h"
+#include "gmm_localization/core/matching/traversal_image.h"
 #include "gmm_localization/ros/ekf_node_options.h"
 #include "gmm_localization/ros/params.h"
 

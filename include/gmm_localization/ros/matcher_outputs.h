@@ -10,8 +10,8 @@
 #include <sensor_msgs/PointCloud2.h>
 
 #include "gmm_localization/MatchStatus.h"
-#include "gmm_localization/core/localizer_pipeline_match.h"
-#include "gmm_localization/core/localizer_pipeline_traversal.h"
+#include "gmm_localization/core/localization/match_processor.h"
+#include "gmm_localization/core/matching/traversal_image.h"
 
 namespace gmm_localization {
 namespace node {

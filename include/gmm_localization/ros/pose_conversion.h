@@ -6,7 +6,7 @@
 #include <geometry_msgs/Transform.h>
 #include <Eigen/Geometry>
 
-#include "gmm_localization/core/search_problem.h"
+#include "gmm_localization/core/matching/search_problem.h"
 
 namespace gmm_localization {
 namespace node {

@@ -14,7 +14,7 @@
 
 #include <Eigen/Core>
 
-#include "gmm_localization/core/result.h"
+#include "gmm_localization/core/common/result.h"
 
 namespace gmm_localization {
 namespace sim {

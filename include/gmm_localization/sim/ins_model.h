@@ -12,7 +12,7 @@
 
 #include <Eigen/Geometry>
 
-#include "gmm_localization/core/result.h"
+#include "gmm_localization/core/common/result.h"
 #include "gmm_localization/sim/random.h"
 #include "gmm_localization/sim/trajectory.h"
 

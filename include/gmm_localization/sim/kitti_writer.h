@@ -12,7 +12,7 @@
 
 #include <Eigen/Geometry>
 
-#include "gmm_localization/core/result.h"
+#include "gmm_localization/core/common/result.h"
 #include "gmm_localization/sim/lidar_simulator.h"
 
 namespace gmm_localization {

@@ -13,7 +13,7 @@
 
 #include <Eigen/Geometry>
 
-#include "gmm_localization/core/result.h"
+#include "gmm_localization/core/common/result.h"
 #include "gmm_localization/sim/town.h"
 #include "gmm_localization/sim/vehicle_mesh.h"
 

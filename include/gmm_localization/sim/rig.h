@@ -8,7 +8,7 @@
 
 #include <Eigen/Geometry>
 
-#include "gmm_localization/core/result.h"
+#include "gmm_localization/core/common/result.h"
 
 namespace gmm_localization {
 namespace sim {

@@ -10,7 +10,7 @@
 
 #include <Eigen/Core>
 
-#include "gmm_localization/core/result.h"
+#include "gmm_localization/core/common/result.h"
 #include "gmm_localization/sim/town.h"
 
 namespace gmm_localization {

@@ -15,7 +15,7 @@
 #include <memory>
 #include <vector>
 
-#include "gmm_localization/core/result.h"
+#include "gmm_localization/core/common/result.h"
 #include "gmm_localization/sim/hdl32e.h"
 #include "gmm_localization/sim/ins_model.h"
 #include "gmm_localization/sim/lidar_simulator.h"

@@ -13,7 +13,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "gmm_localization/core/result.h"
+#include "gmm_localization/core/common/result.h"
 #include "gmm_localization/sim/mesh.h"
 #include "gmm_localization/sim/town_config.h"
 

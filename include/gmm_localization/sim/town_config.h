@@ -3,7 +3,7 @@
 
 #include <cstdint>
 
-#include "gmm_localization/core/result.h"
+#include "gmm_localization/core/common/result.h"
 
 namespace gmm_localization {
 namespace sim {

@@ -14,7 +14,7 @@
 
 #include <Eigen/Geometry>
 
-#include "gmm_localization/core/result.h"
+#include "gmm_localization/core/common/result.h"
 #include "gmm_localization/sim/route.h"
 #include "gmm_localization/sim/town.h"
 

@@ -7,7 +7,7 @@
 
 #include <memory>
 
-#include "gmm_localization/core/result.h"
+#include "gmm_localization/core/common/result.h"
 #include "gmm_localization/sim/pass.h"
 #include "gmm_localization/sim/town.h"
 

@@ -6,9 +6,9 @@
 #include <map>
 #include <set>
 
-#include "gmm_localization/core/exact_scorer.h"
-#include "gmm_localization/core/kitti_source.h"
-#include "gmm_localization/core/rasterizer.h"
+#include "gmm_localization/core/common/types.h"
+#include "gmm_localization/core/mapping/kitti_source.h"
+#include "gmm_localization/core/raster/rasterizer.h"
 
 namespace gmm_localization {
 namespace bench {

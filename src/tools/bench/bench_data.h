@@ -9,11 +9,11 @@
 
 #include <Eigen/Geometry>
 
-#include "gmm_localization/core/chunk_map.h"
-#include "gmm_localization/core/map_store.h"
-#include "gmm_localization/core/result.h"
-#include "gmm_localization/core/scan_filter.h"
-#include "gmm_localization/core/search_problem.h"
+#include "gmm_localization/core/common/result.h"
+#include "gmm_localization/core/map/map_store.h"
+#include "gmm_localization/core/matching/scan_filter.h"
+#include "gmm_localization/core/matching/search_problem.h"
+#include "gmm_localization/core/raster/chunk_map.h"
 
 namespace gmm_localization {
 namespace bench {

@@ -7,7 +7,7 @@
 
 #include <Eigen/Geometry>
 
-#include "gmm_localization/core/scan_filter.h"
+#include "gmm_localization/core/matching/scan_filter.h"
 
 namespace gmm_localization {
 namespace bench {

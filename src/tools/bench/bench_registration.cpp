@@ -16,8 +16,8 @@
 
 #include "bench_data.h"
 #include "bench_peers.h"
-#include "gmm_localization/core/exact_scorer.h"
-#include "gmm_localization/core/registration.h"
+#include "gmm_localization/core/common/types.h"
+#include "gmm_localization/core/matching/registration.h"
 
 using namespace gmm_localization;
 using namespace gmm_localization::bench;

@@ -3,7 +3,7 @@
 
 #include <random>
 
-#include "gmm_localization/core/gmm_tile.h"
+#include "gmm_localization/core/map/gmm_tile.h"
 
 namespace gmm_localization {
 namespace testing {

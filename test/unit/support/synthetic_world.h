@@ -11,9 +11,9 @@
 
 #include <Eigen/Geometry>
 
-#include "gmm_localization/core/gmm_tile.h"
-#include "gmm_localization/core/scan_filter.h"
-#include "gmm_localization/core/search_problem.h"
+#include "gmm_localization/core/map/gmm_tile.h"
+#include "gmm_localization/core/matching/scan_filter.h"
+#include "gmm_localization/core/matching/search_problem.h"
 
 namespace gmm_localization {
 namespace testing {

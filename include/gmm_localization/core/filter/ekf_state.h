@@ -1,0 +1,100 @@
+#pragma once
+// EKF state layout, frames and the small geometric helpers every EKF file shares.
+//
+// The state (15 components, robot_localization's layout) describes base_link in the map frame
+// (REP-105, x east, y north, z up; REP-103 SI units):
+//   position        x, y, z            map frame                                 [m]
+//   orientation     roll, pitch, yaw   map_R_base = Rz(yaw) Ry(pitch) Rx(roll)   [rad]
+//   linear velocity vx, vy, vz         base_link frame                           [m/s]
+//   angular rate    wx, wy, wz         base_link frame                           [rad/s]
+//   acceleration    ax, ay, az         base_link frame, gravity excluded         [m/s^2]
+// Angles are kept wrapped to [-pi, pi). The Euler parameterisation is singular at |pitch| =
+// pi/2, which a ground vehicle never reaches; the models clamp cos(pitch) away from zero so no
+// division by zero can occur, but near the singularity results are meaningless.
+//
+// Why 15 states and not fewer: the matcher observes x, y, yaw (and optionally z, roll, pitch);
+// the Applanix gives body twist; the IMU gives rates, specific force and roll/pitch. Keeping the
+// body acceleration as a state lets the accelerometer contribute (between scan matches and when
+// the odometry twist drops out) at the price of six states that are cheap at this size. No IMU
+// biases are estimated: the Applanix IMU output is bias-compensated by the INS.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "gmm_localization/core/common/types.h"
+
+namespace gmm_localization {
+
+/// Index of each component in the EKF state vector (see the table at the top of this file).
+enum StateIndex : int {
+  kStateX = 0,
+  kStateY,
+  kStateZ,
+  kStateRoll,
+  kStatePitch,
+  kStateYaw,
+  kStateVx,
+  kStateVy,
+  kStateVz,
+  kStateWx,
+  kStateWy,
+  kStateWz,
+  kStateAx,
+  kStateAy,
+  kStateAz,
+  kStateSize  ///< number of states (15)
+};
+
+/// First index of each 3-vector block.
+constexpr int kPositionBlock = kStateX;
+constexpr int kOrientationBlock = kStateRoll;
+constexpr int kLinearVelocityBlock = kStateVx;
+constexpr int kAngularVelocityBlock = kStateWx;
+constexpr int kLinearAccelerationBlock = kStateAx;
+
+using StateVector = Eigen::Matrix<double, kStateSize, 1>;
+using StateCovariance = Eigen::Matrix<double, kStateSize, kStateSize>;
+
+/// Short name of a state component ("x", "yaw", "vx", ...) for reasons and diagnostics;
+/// "?" for an index outside [0, kStateSize).
+const char* stateName(int index);
+
+/// True for roll, pitch and yaw: components whose differences are wrapped.
+inline bool isAngleState(int index) {
+  return index == kStateRoll || index == kStatePitch || index == kStateYaw;
+}
+
+/// Wraps an angle to [-pi, pi). Non-finite input is returned unchanged.
+double wrapAngle(double angle_rad);
+
+/// map_R_base for ZYX Euler angles: Rz(yaw) * Ry(pitch) * Rx(roll).
+Eigen::Matrix3d rotationFromRpy(double roll_rad, double pitch_rad, double yaw_rad);
+
+/// ZYX Euler angles (roll, pitch, yaw) of a rotation matrix, each in [-pi, pi], pitch in
+/// [-pi/2, pi/2]. Inverse of rotationFromRpy away from the pitch singularity.
+Eigen::Vector3d rpyFromRotation(const Eigen::Matrix3d& rotation);
+
+/// One filter state: mean and covariance at a time.
+struct EkfState {
+  double time_s = 0.0;  ///< time of validity [s], the caller's clock (e.g. ROS stamp in seconds)
+  StateVector x = StateVector::Zero();
+  StateCovariance P = StateCovariance::Identity();
+
+  /// map_T_base: the pose of base_link in the map frame.
+  Eigen::Isometry3d pose() const;
+  /// Covariance of (x, y, z, roll, pitch, yaw), the order of geometry_msgs PoseWithCovariance.
+  Matrix6d poseCovariance() const { return P.block<6, 6>(kStateX, kStateX); }
+  /// Body-frame linear velocity of base_link [m/s].
+  Eigen::Vector3d linearVelocity() const { return x.segment<3>(kLinearVelocityBlock); }
+  /// Body-frame angular velocity of base_link [rad/s].
+  Eigen::Vector3d angularVelocity() const { return x.segment<3>(kAngularVelocityBlock); }
+  /// Body-frame acceleration of base_link without gravity [m/s^2].
+  Eigen::Vector3d linearAcceleration() const { return x.segment<3>(kLinearAccelerationBlock); }
+  /// Covariance of (vx, vy, vz, wx, wy, wz), the order of geometry_msgs TwistWithCovariance.
+  Matrix6d twistCovariance() const { return P.block<6, 6>(kStateVx, kStateVx); }
+};
+
+/// Writes a pose (map_T_base) into the position and orientation components of x.
+void setPoseInState(const Eigen::Isometry3d& map_T_base, StateVector* x);
+
+}  // namespace gmm_localization

@@ -1,0 +1,147 @@
+#pragma once
+// LocalizationFilter: the core Ekf plus the policy around it that the ekf nodelet and
+// LocalizerPipeline share, so that both fuse the same way:
+// - default covariances for inputs that report none (all zeros, the ROS convention);
+// - initialization from /initialpose or, when nothing else started the filter, from the first
+//   scan match (with the match's own covariance);
+// - /initialpose: the pose's x, y, yaw variances are raised to at least the relocalization
+//   sigmas (the matcher searches its wide window around such a pose, so a correction across
+//   that window must pass the Mahalanobis gate); a planar pose (z unknown) keeps the filter's
+//   z, roll and pitch when it runs, else gets unknown_*_sigma;
+// - relocalization: relocalize() and the gate lockout (gate_lockout_count consecutive
+//   matches rejected by the Mahalanobis gate) inflate the x, y, yaw covariance to the
+//   relocalization sigmas. The matcher then sees a 3-sigma beyond its maximum window in the
+//   posterior and searches the maximum window; the next match passes the gate and collapses
+//   the covariance again (paper V-B: matches "initialized around our 3-sigma posterior").
+// - time going backwards (a looping bag: Ekf reports kTimeWentBackwards) or
+//   forward_jump_reset_count consecutive forward jumps: the filter stops (inactive) and waits
+//   for a new initial pose or match. Counters survive (they live in the Ekf).
+// ROS-free; not thread-safe (one caller thread or a lock).
+
+#include <array>
+#include <deque>
+#include <string>
+#include <vector>
+
+#include "gmm_localization/core/common/types.h"
+#include "gmm_localization/core/filter/ekf.h"
+
+namespace gmm_localization {
+
+/// Covariances given to inputs whose covariance is all zeros ("unknown"), standard deviations.
+struct MeasurementDefaults {
+  double imu_orientation_sigma_rad = 0.01;
+  double imu_angular_velocity_sigma_radps = 0.01;
+  double imu_linear_acceleration_sigma_mps2 = 0.2;
+  double twist_linear_sigma_mps = 0.05;
+  double twist_angular_sigma_radps = 0.01;
+
+  std::string validate() const;
+};
+
+struct FilterPolicyOptions {
+  /// Components of a scan-match pose that are fused, order (x, y, z, roll, pitch, yaw). Roll
+  /// and pitch are better observed by the IMU; the matcher's come from a short hill climb.
+  std::array<bool, 6> match_mask = {true, true, true, false, false, true};
+  /// Start the filter from the first scan match when no initial pose came.
+  bool initialize_from_match = true;
+  /// Consecutive gate-rejected matches that trigger the inflation (relocalization).
+  int gate_lockout_count = 5;
+  /// x, y and yaw standard deviations after relocalize() or a lockout, and the floor of an
+  /// initial pose's [m], [rad]. With the matcher's sigma_multiplier 3 and maximum window
+  /// 12.5 m / 15 deg, anything above 4.2 m / 0.087 rad searches the maximum window.
+  double relocalize_sigma_xy_m = 6.0;
+  double relocalize_sigma_yaw_rad = 0.13;
+  /// Standard deviations of a planar initial pose's unknown z and roll/pitch [m], [rad].
+  double unknown_z_sigma_m = 3.0;
+  double unknown_tilt_sigma_rad = 0.05;
+  /// Consecutive kTimeJumpedForward reports after which the filter stops and waits.
+  int forward_jump_reset_count = 3;
+  MeasurementDefaults defaults;
+  /// Floor of the INS linear-twist standard deviation, per axis k: sqrt(min^2 + (per_speed *
+  /// v_k)^2), v_k the twist's own speed along k. An INS reports millimetres per second but carries
+  /// a scale error of a few tenths of a percent; trusted as reported, the filter integrates that
+  /// bias between matches and runs ahead of them at speed. 0, 0: the reported covariance as is.
+  double twist_linear_min_sigma_mps = 0.0;
+  double twist_linear_sigma_per_speed = 0.0;
+
+  std::string validate() const;
+};
+
+enum class FilterEventKind {
+  kInitializedFromPose,   ///< /initialpose (re)started or moved the filter
+  kInitializedFromMatch,  ///< first match started the filter
+  kStoppedTimeBackwards,  ///< waiting for a new initial pose or match
+  kStoppedTimeJump,
+  kGateLockout,        ///< covariance inflated after consecutive gate rejections
+  kRelocalizeRequest,  ///< covariance inflated on request
+};
+const char* filterEventName(FilterEventKind kind);
+
+struct FilterEvent {
+  FilterEventKind kind;
+  double stamp_s = 0.0;
+  std::string detail;
+};
+
+class LocalizationFilter {
+ public:
+  static Result<LocalizationFilter> create(const EkfOptions& ekf,
+                                           const FilterPolicyOptions& policy);
+
+  /// IMU sample in base_link; zero covariances get the defaults. Empty when inactive; the
+  /// samples of the last kPendingSpanS are then kept and replayed after the stamp of the pose
+  /// that starts the filter (a scan match arrives a few hundred ms after its stamp: without
+  /// the replay the first estimate would stay where the vehicle was then).
+  std::vector<FuseReport> addImu(ImuMeasurement imu);
+  /// INS body twist; a zero covariance gets the defaults. Kept like IMU samples while inactive.
+  FuseReport addTwist(TwistMeasurement twist);
+
+  /// How much IMU and twist history is kept while the filter waits for its first pose [s].
+  static constexpr double kPendingSpanS = 2.0;
+  /// Scan match at stamp_s: pose of base_link in map with its 6x6 covariance (x, y, z, roll,
+  /// pitch, yaw), fused with match_mask (or starting the filter, see the file comment).
+  FuseReport addMatch(double stamp_s, const Pose6& pose, const Matrix6d& covariance);
+  /// /initialpose. z_and_tilt_known false: z, roll, pitch are taken from the running filter (or
+  /// get the unknown sigmas). Fails, changing nothing, on a non-finite pose or bad covariance.
+  Status setInitialPose(const Pose6& pose, const Matrix6d& covariance, double stamp_s,
+                        bool z_and_tilt_known);
+  /// Inflates x, y, yaw to the relocalization sigmas; fails when the filter is not running.
+  Status relocalize(double stamp_s);
+  /// Stops the filter (waits for an initial pose or a match).
+  void stop();
+
+  /// Running: initialized and not stopped. Publish nothing while false.
+  bool active() const { return active_; }
+  /// State at time_s (see Ekf::stateAt); fails when inactive.
+  Result<EkfState> stateAt(double time_s) const;
+  const Ekf& ekf() const { return ekf_; }
+  const FilterPolicyOptions& options() const { return options_; }
+  int consecutiveGateRejections() const { return gate_run_; }
+  uint64_t lockouts() const { return lockouts_; }
+  uint64_t stops() const { return stops_; }
+  /// Events since the last call (for logs and diagnostics), oldest first.
+  std::vector<FilterEvent> takeEvents();
+
+ private:
+  LocalizationFilter(Ekf ekf, const FilterPolicyOptions& options)
+      : ekf_(std::move(ekf)), options_(options) {}
+  void checkTime(const FuseReport& report);
+  Status inflate(FilterEventKind kind, double stamp_s, std::string detail);
+  void event(FilterEventKind kind, double stamp_s, std::string detail);
+  /// Feeds the kept IMU and twist samples stamped after stamp_s, in time order, then drops all.
+  void replayPending(double stamp_s);
+
+  Ekf ekf_;
+  std::deque<ImuMeasurement> pending_imu_;
+  std::deque<TwistMeasurement> pending_twist_;
+  FilterPolicyOptions options_;
+  bool active_ = false;
+  int gate_run_ = 0;
+  int forward_jumps_ = 0;
+  uint64_t lockouts_ = 0;
+  uint64_t stops_ = 0;
+  std::vector<FilterEvent> events_;
+};
+
+}  // namespace gmm_localization

@@ -1,0 +1,176 @@
+#pragma once
+// The localization policy (paper V-B: "scan matches initialized around our 3-sigma posterior
+// belief", fused into an EKF with their uncertainty): how big a search window each scan gets,
+// when a match is good enough to publish, and which 6x6 covariance is published with it.
+//
+// Shared, unchanged, by the matcher nodelet and by LocalizerPipeline (the offline `evaluate`
+// path), so that both make the same decisions from the same options. ROS-free; no clocks.
+//
+// Frames and units: poses are base_link in the map frame (REP-105), SI units; covariances of
+// (x, y, yaw) are [m^2, m^2, rad^2]; 6x6 covariances are in geometry_msgs order (x, y, z, roll,
+// pitch, yaw).
+
+#include <cstdint>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "gmm_localization/core/common/types.h"
+#include "gmm_localization/core/matching/registration.h"
+
+namespace gmm_localization {
+
+/// Size of the x, y, heading search window.
+struct WindowPolicyOptions {
+  /// The window's half extent per axis is this many standard deviations of the prior (the
+  /// paper's 3-sigma), then clamped to [min, max] below.
+  double sigma_multiplier = 3.0;
+  double min_half_xy_m = 1.0;            ///< [m] smallest half extent in x and in y
+  double max_half_xy_m = 12.5;           ///< [m] largest (the paper's 25 m x 25 m window)
+  double min_half_heading_rad = 0.0349;  ///< [rad] smallest half heading range (2 deg)
+  double max_half_heading_rad = 0.2618;  ///< [rad] largest (the paper's +-15 deg)
+  /// Window after an explicit pose (/initialpose, configured pose) or while relocalizing.
+  double wide_half_xy_m = 12.5;           ///< [m]
+  double wide_half_heading_rad = 0.2618;  ///< [rad]
+  /// Height pre-alignment range used instead of RegistrationOptions::z_search_m when the
+  /// prior's height is unknown (rviz "2D Pose Estimate" gives z = 0) [m].
+  double unknown_z_search_m = 5.0;
+
+  std::string validate() const;
+};
+
+/// When a registration result is published (and offered to the EKF).
+struct AcceptancePolicyOptions {
+  /// Exact mean log-likelihood per refined point at the result [nats]; below it the scan is
+  /// explained by the map too poorly (wrong place, heavy occlusion). Points that the map cannot
+  /// explain score the raster floor (RasterOptions::ll_floor, -6 by default): a scan with half
+  /// its points on snow or traffic scores about -3; a sheet the map cannot explain -6. Loose
+  /// on purpose (not yet calibrated on the simulator's Snowy pass); the gate and the other
+  /// rules catch wrong matches.
+  double min_log_likelihood_per_point = -4.0;
+  /// Share of the scan's points that lie over mapped cells at the result, in [0, 1].
+  double min_map_coverage = 0.4;
+  /// Largest standard deviations of the search covariance accepted: a flatter optimum is
+  /// ambiguous (e.g. a featureless stretch) [m], [rad].
+  double max_sigma_xy_m = 1.5;
+  double max_sigma_yaw_rad = 0.05;
+  /// Reject a discrete optimum on the border of the window in x, y or heading: the true
+  /// optimum may lie outside it (the prior was too far off for its window).
+  bool reject_on_window_edge = true;
+
+  std::string validate() const;
+};
+
+/// The covariance published with an accepted match.
+struct PoseCovariancePolicyOptions {
+  /// true: the search-space covariance (Olson's method, MatchResult::covariance_xyh) times
+  /// search_covariance_scale; false: the paper's fixed measurement uncertainties below.
+  bool use_search_covariance = true;
+  double search_covariance_scale = 1.0;  ///< multiplies the search covariance
+  double fixed_sigma_xy_m = 0.15;        ///< [m] when use_search_covariance is false
+  double fixed_sigma_yaw_rad = 0.005;    ///< [rad]
+  double min_sigma_xy_m = 0.03;          ///< floors applied in both modes [m], [rad]
+  double min_sigma_yaw_rad = 0.002;
+  /// Standard deviations of the hill climb's z, roll and pitch (not estimated by the search):
+  /// fixed [m], [rad].
+  double sigma_z_m = 0.1;
+  double sigma_roll_pitch_rad = 0.02;
+
+  std::string validate() const;
+};
+
+/// Where the search centre comes from when the EKF is not usable, and when to widen.
+struct RelocalizationPolicyOptions {
+  /// After this many consecutive rejected matches (searches that ran but were not accepted),
+  /// the matcher searches the wide window around its prior until a match is accepted.
+  int max_consecutive_rejections = 5;
+  /// An EKF posterior is used for a scan when its stamp is within this of the scan's [s].
+  double max_posterior_age_s = 1.0;
+  /// The last accepted match is used (source "previous_match") when no fresh posterior
+  /// exists and it is within this age [s]; its sigma grows by previous_match_sigma_growth_mps
+  /// per second of age.
+  double max_previous_match_age_s = 2.0;
+  double previous_match_sigma_growth_mps = 1.0;  ///< [m/s], and 0.1 rad/s on heading
+  /// An older estimate (posterior or match) up to this age is still used as the centre of a
+  /// wide window (e.g. after the EKF reset on a time jump); beyond it there is "no prior" [s].
+  double max_stale_prior_age_s = 30.0;
+
+  std::string validate() const;
+};
+
+struct LocalizationPolicyOptions {
+  WindowPolicyOptions window;
+  AcceptancePolicyOptions acceptance;
+  PoseCovariancePolicyOptions covariance;
+  RelocalizationPolicyOptions relocalization;
+
+  /// Empty when valid, else the first offending key with its value and range.
+  std::string validate() const;
+};
+
+/// Origin of a search prior (the MatchStatus prior_source strings).
+enum class PriorSource { kNone, kEkf, kInitialPose, kConfigured, kPreviousMatch };
+/// "none", "ekf", "initialpose", "configured", "previous_match".
+const char* priorSourceName(PriorSource source);
+
+/// Half extents of a search window [m], [m], [rad].
+struct WindowExtent {
+  double half_x_m = 0.0;
+  double half_y_m = 0.0;
+  double half_heading_rad = 0.0;
+};
+
+/// The initial guess for one scan: base_link in map at the scan stamp.
+struct Prior {
+  PriorSource source = PriorSource::kNone;
+  Pose6 pose;
+  /// Covariance of (x, y, yaw) of the prior [m^2, m^2, rad^2].
+  Eigen::Matrix3d covariance_xyh = Eigen::Matrix3d::Identity();
+  /// Search the wide window (explicit pose, relocalization, stale estimate).
+  bool wide = false;
+  /// A wide window other than WindowPolicyOptions::wide_* (a configured pose's own window);
+  /// used when its half_x_m > 0.
+  WindowExtent wide_window;
+  /// False when the height is a guess (rviz pose): the search then pre-aligns over
+  /// WindowPolicyOptions::unknown_z_search_m.
+  bool z_known = true;
+  /// Scan stamp minus the stamp of the estimate the prior was carried from [s].
+  double age_s = 0.0;
+  /// True when odometry carried the estimate to the scan stamp (else constant velocity).
+  bool carried_by_odometry = false;
+  /// Which explicit pose (PriorTracker::setExplicitPose call, counted from 1) this prior came
+  /// from; 0 for other sources. Lets a match that started before a newer explicit pose leave
+  /// that pose pending.
+  uint64_t explicit_generation = 0;
+
+  bool valid() const { return source != PriorSource::kNone; }
+};
+
+/// Wide window for a wide prior (its own wide_window when set); otherwise sigma_multiplier x the
+/// prior's standard deviation per axis (x, y in the map frame; yaw), each clamped to [min, max].
+/// Non-finite sigmas give the maximum.
+WindowExtent searchWindowFor(const Prior& prior, const WindowPolicyOptions& options);
+
+/// The discretised window Registration::match will search for this request and map
+/// resolution (cells and heading steps), for edge checks and the traversal picture.
+SearchWindow discreteWindow(const MatchRequest& request, double heading_step_rad,
+                            double resolution_m);
+
+struct AcceptanceDecision {
+  bool accepted = false;
+  std::string reason;  ///< why not, naming the value and the limit; empty when accepted
+};
+
+/// Applies the acceptance rules in the order: finite result, map coverage, log-likelihood per
+/// point, search covariance, window edge. `window` is discreteWindow() of the request.
+AcceptanceDecision acceptMatch(const MatchResult& result, const SearchWindow& window,
+                               const AcceptancePolicyOptions& options);
+
+/// The 6x6 covariance published with a match: the (x, y, yaw) block from the search
+/// covariance (scaled) or the fixed sigmas, floored; z, roll, pitch from the fixed sigmas; no
+/// correlation between the two groups. Always symmetric positive definite and finite when the
+/// options are valid (a non-finite search covariance falls back to the fixed sigmas).
+Matrix6d publishedPoseCovariance(const Eigen::Matrix3d& search_covariance_xyh,
+                                 const PoseCovariancePolicyOptions& options);
+
+}  // namespace gmm_localization

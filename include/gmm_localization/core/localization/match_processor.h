@@ -1,0 +1,96 @@
+#pragma once
+// MatchProcessor: what the matcher does with one scan, ROS-free, shared by the matcher
+// nodelet's worker thread and by LocalizerPipeline: deskew with the INS twist, size the window
+// from the prior (localization_policy.h), run Registration::match (paper Algorithm 1), apply
+// the acceptance rules and compute the covariance to publish. Its MatchReport carries every
+// field of gmm_localization/MatchStatus.
+//
+// Thread-safety: process() is const and may run concurrently on different inputs.
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "gmm_localization/core/localization/prior_tracker.h"
+#include "gmm_localization/core/matching/registration.h"
+
+namespace gmm_localization {
+
+/// A merged LIDAR revolution in base_link.
+struct ScanInput {
+  double stamp_s = 0.0;  ///< [s]
+  PointList points;      ///< base_link [m]; non-finite points allowed (dropped and counted)
+  /// Per-point capture time relative to stamp_s [s] (empty: no deskewing), same size as points.
+  std::vector<float> time_s;
+};
+
+/// How the scan ended, for the relocalization state machine.
+enum class MatchOutcome {
+  kAccepted,  ///< pose published
+  kRejected,  ///< a search ran (or the scan fell off the map) but the result was not accepted
+  kSkipped,   ///< nothing to search with: no prior, no map, no usable points
+};
+const char* matchOutcomeName(MatchOutcome outcome);  ///< "accepted", "rejected", "skipped"
+
+struct MatchReport {
+  double stamp_s = 0.0;
+  MatchOutcome outcome = MatchOutcome::kSkipped;
+  bool accepted() const { return outcome == MatchOutcome::kAccepted; }
+  std::string reason;  ///< why not accepted; empty when accepted
+
+  Prior prior;
+  WindowExtent window;         ///< requested half extents
+  SearchWindow search_window;  ///< discretised (cells, heading steps), valid when searched
+  bool deskewed = false;
+
+  // Input
+  size_t input_points = 0;
+  size_t dropped_nonfinite = 0;
+  size_t search_points = 0;
+  // Search and result (valid when a registration returned a result)
+  bool has_result = false;
+  MatchResult result;            ///< registration output (pose, search, obstacles, filtered scan)
+  double correction_xy_m = 0.0;  ///< distance from the prior to the result [m]
+  double correction_yaw_rad = 0.0;
+  Pose6 pose;                              ///< published pose (when accepted)
+  Matrix6d covariance = Matrix6d::Zero();  ///< published covariance (when accepted)
+  // Timing [s] (when a clock was given)
+  RegistrationTiming timing;
+  double total_s = 0.0;
+
+  /// The scan as registered (deskewed, base_link): the points `result.obstacles` labels.
+  PointList points;
+  /// Branch-and-bound traversal (when requested and searched).
+  std::vector<TraversalNode> traversal;
+};
+
+class MatchProcessor {
+ public:
+  /// Validates both option sets; the reason names the offending key.
+  static Result<MatchProcessor> create(const RegistrationOptions& registration,
+                                       const LocalizationPolicyOptions& policy);
+
+  /// Processes one scan (moved in, deskewed in place, returned in the report's `points`). `twist`:
+  /// the body twist for deskewing (null: no deskewing). `want_traversal`: record the search
+  /// traversal. `now` (seconds, any epoch) enables the timings. Never throws; every failure is a
+  /// report with a reason. An accepted report always has a finite pose and covariance.
+  MatchReport process(const ChunkMap& map, ScanInput scan, const Prior& prior,
+                      const BodyTwist* twist, bool want_traversal,
+                      const std::function<double()>& now = nullptr) const;
+
+  const RegistrationOptions& registrationOptions() const { return tracking_.options(); }
+  const LocalizationPolicyOptions& policyOptions() const { return policy_; }
+
+ private:
+  MatchProcessor(const RegistrationOptions& tracking, const RegistrationOptions& unknown_z,
+                 const LocalizationPolicyOptions& policy)
+      : tracking_(tracking), unknown_z_(unknown_z), policy_(policy) {}
+
+  Registration tracking_;   ///< prior height known
+  Registration unknown_z_;  ///< wider height pre-alignment (planar initial pose)
+  LocalizationPolicyOptions policy_;
+};
+
+}  // namespace gmm_localization

@@ -1,0 +1,156 @@
+#pragma once
+// The offline Gaussian mixture map builder (paper section III): points in the map frame ->
+// per-cell z columns -> Gaussian blur with neighbouring columns (as weights) -> weighted EM per
+// cell with model selection -> compact tiles + manifest on disk.
+//
+// Streaming, in two passes, so memory does not grow with the size of the map:
+//  1. addBatch() filters each batch and bins its points, as (cell, z-bin, count) records, into
+//     one spill file per tile in a temporary directory. A point within blur_radius_cells of a
+//     tile border is also written to the neighbouring tiles' spill files (a halo), so each tile
+//     can later be processed alone. Records are buffered per tile, merged (same cell and z bin
+//     -> one record with a count) and appended to disk when a buffer fills; at most
+//     spill_buffer_bytes are held in memory.
+//  2. finish() processes the tiles one at a time on `threads` worker threads: read the tile's
+//     spill file, build each column's z histogram, blur, fit, encode and write the tile file
+//     (atomically), then delete the spill file. The manifest is written last, atomically: a
+//     directory without a manifest is not a map.
+// Only one tile's histogram per worker is ever in memory.
+//
+// The blur (paper: "to capture the variance of our LIDAR scanner and reduce discretization
+// errors, we blur these z-points with neighboring columns with a Gaussian kernel"): the samples
+// of cell c are the z bins of every column c' with |c' - c|_inf <= blur_radius_cells, weighted
+// by exp(-|center(c') - center(c)|^2 / (2 blur_sigma_m^2)) (1 for c itself). Default sigma
+// 0.10 m: a point's position within a 20 cm cell is uncertain by 0.2/sqrt(12) = 5.8 cm per
+// axis, plus ~2 cm range noise and a few cm of map pose error, i.e. ~7-10 cm; a radius of one
+// cell then holds every weight above exp(-4) = 0.018. A cell with fewer than min_own_points
+// returns in its own column stays empty: the blur reshapes observed cells, it never invents
+// map where nothing was seen.
+//
+// z binning: heights are binned at z_bin_m (1 cm, error <= 5 mm, adding (1 cm)^2/12 of
+// variance: negligible against the 3 cm sigma floor). A cell with more than
+// max_samples_per_cell distinct bins after the blur (tall walls) has adjacent bins merged
+// (keeping each merged sample at its weighted centroid) until it fits, which bounds EM's cost.
+//
+// Filters, applied per point in this order (each counted in MapBuildStats):
+//  - non-finite coordinates, and points beyond 1e7 m of the grid origin or 1e6 m in height
+//    (no map frame is that large; keep coordinates local), are dropped;
+//  - range: distance from the batch's sensor origin outside [min_range_m, max_range_m] is
+//    dropped (vehicle self-returns, far and sparse returns). Batches without a sensor origin
+//    (a point-cloud map) are not range-filtered;
+//  - height band: map-frame z outside [min_z_m, max_z_m] is dropped;
+//  - voxel pre-filter (voxel_m > 0): within one batch, only the first point of each
+//    voxel_m-sized cube is kept, which evens out the density near the sensor. Off by default.
+//
+// Threading: addBatch() and finish() must be called from one thread (the caller's); finish()
+// uses worker threads internally and calls the progress callback from the caller's thread.
+// Failure: every method returns a Status/Result with a reason; the destructor removes the
+// temporary directory whatever happened, and a failed finish() removes the tile files it wrote.
+// A process killed outright leaves its `.gmm_build_spill.<pid>.<n>` directory behind; the next
+// create() in the same place removes those whose process is gone.
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <string>
+
+#include "gmm_localization/core/common/result.h"
+#include "gmm_localization/core/map/map_format.h"
+#include "gmm_localization/core/map/map_geometry.h"
+#include "gmm_localization/core/mapping/em_fitter.h"
+#include "gmm_localization/core/mapping/point_batch.h"
+
+namespace gmm_localization {
+
+struct MapBuilderOptions {
+  std::string output_directory;  ///< created if missing
+  bool overwrite = false;        ///< replace a map already there (its manifest is removed first)
+  MapGeometry geometry;          ///< resolution (paper: 20 cm), tile size, origin
+  EmFitterOptions em;            ///< K_max (default 2), sigma floor, criterion
+
+  double blur_sigma_m = 0.10;      ///< Gaussian kernel sigma [m], >= 0 (0: no blur)
+  int blur_radius_cells = 1;       ///< kernel half-width [cells], in [0, min(8, tile size / 4)]
+  double z_bin_m = 0.01;           ///< z histogram bin [m], in [1e-4, 0.1]
+  int max_samples_per_cell = 256;  ///< distinct z samples per fit, in [16, 65536]
+  int min_own_points = 1;          ///< returns needed in a cell's own column, >= 0
+
+  double min_range_m = 1.0;                                   ///< [m], >= 0
+  double max_range_m = 120.0;                                 ///< [m], > min_range_m
+  double min_z_m = -std::numeric_limits<double>::infinity();  ///< map-frame height band [m]
+  double max_z_m = std::numeric_limits<double>::infinity();
+  double voxel_m = 0.0;  ///< per-batch voxel filter edge [m], 0 = off, else >= 0.005
+
+  int threads = 2;             ///< worker threads in finish(), in [1, 64]
+  std::string temp_directory;  ///< parent of the spill directory; empty: output_directory
+  size_t spill_buffer_bytes = size_t{256} << 20;  ///< in-memory spill buffers, >= 1 MiB
+  TileCodecOptions codec;
+  Georeference georeference;  ///< written to the manifest
+  std::string provenance;     ///< written to the manifest (inputs, tool, options)
+
+  /// Empty when valid, else the first offending field, its value and the allowed range.
+  std::string validate() const;
+  /// One line with the options that shape the map (for provenance and logs).
+  std::string describe() const;
+};
+
+struct MapBuildStats {
+  uint64_t batches = 0;
+  uint64_t batches_without_origin = 0;  ///< not range-filtered
+  uint64_t input_points = 0;
+  uint64_t kept_points = 0;
+  uint64_t dropped_invalid = 0;  ///< non-finite, or beyond 1e7 m from the origin / |z| > 1e6 m
+  uint64_t dropped_range = 0;
+  uint64_t dropped_height = 0;
+  uint64_t dropped_voxel = 0;
+  uint64_t spill_bytes = 0;  ///< written to the temporary directory
+  uint64_t tiles = 0;        ///< tile files written
+  std::array<uint64_t, kMaxMixtureComponents + 1> cells_by_components{};  ///< over written tiles
+  uint64_t map_bytes = 0;  ///< tile files + manifest [bytes]
+  EmFitterCounters em;     ///< EM work over all cells (fits, runs, iterations, samples)
+};
+
+struct BuildProgress {
+  enum class Stage { kFitting, kDone };
+  Stage stage = Stage::kFitting;
+  uint64_t tiles_done = 0;
+  uint64_t tiles_total = 0;
+  uint64_t work_done = 0;  ///< spill bytes of the finished tiles (a proxy for fitting work)
+  uint64_t work_total = 0;
+};
+/// Called from finish()'s calling thread after every tile; return false to cancel the build.
+using BuildProgressCallback = std::function<bool(const BuildProgress&)>;
+
+class MapBuilder {
+ public:
+  /// Validates the options, creates the output directory and the temporary spill directory.
+  /// Fails when the output already holds a map and overwrite is false.
+  static Result<std::unique_ptr<MapBuilder>> create(const MapBuilderOptions& options);
+  ~MapBuilder();  // removes the spill directory
+  MapBuilder(const MapBuilder&) = delete;
+  MapBuilder& operator=(const MapBuilder&) = delete;
+
+  /// Pass 1 for one batch. Fails on a spill write error (the builder is then unusable).
+  Status addBatch(const PointBatch& batch);
+
+  /// Pass 2 and the manifest. Call once; the builder is spent afterwards. Fails when no point
+  /// was kept, on I/O errors, or when the callback cancels.
+  Result<MapBuildStats> finish(const BuildProgressCallback& progress = {});
+
+  /// Counters so far (pass 1 counters grow with addBatch; the rest are set by finish()).
+  const MapBuildStats& stats() const;
+  const MapBuilderOptions& options() const;
+
+ private:
+  struct Impl;
+  explicit MapBuilder(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Reads every batch of `source` into `builder`. `on_batch(done, total)` is called after each
+/// batch (total = source.sizeHint(), 0 when unknown); return false from it to stop early (not
+/// an error). Fails on the first source or builder failure.
+Status addAllBatches(PointBatchSource& source, MapBuilder& builder,
+                     const std::function<bool(size_t done, size_t total)>& on_batch = {});
+
+}  // namespace gmm_localization

@@ -1,0 +1,45 @@
+#pragma once
+// The exact log-likelihood of a cloud in the parametric map (Eq. 1), continuous in x and y, for
+// the hill-climbing refinement of Algorithm 1.
+//
+// Per point: the floored log-likelihoods max(ll_floor, log p_c(z)) of the 3 x 3 cells around
+// the point, averaged with Gaussian weights of the point's distance to each cell centre (kernel
+// sigma about half a cell, like the builder's blur). Empty cells and absent chunks contribute
+// the floor. Units: nats.
+
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "gmm_localization/core/matching/scan_filter.h"
+#include "gmm_localization/core/matching/search_problem.h"
+#include "gmm_localization/core/raster/chunk_map.h"
+
+namespace gmm_localization {
+
+class ExactScorer {
+ public:
+  /// Scores points within radius_m [m] of (center_x, center_y) in the map frame at constant
+  /// cost per cell (a dense grid of the chunks there); points beyond it score the floor.
+  ExactScorer(const ChunkMap& map, double ll_floor, double center_x_m, double center_y_m,
+              double radius_m, double kernel_sigma_m = 0.1);
+
+  /// Interpolated, floored log-likelihood of one map-frame point [nats].
+  double pointLogLikelihood(const Eigen::Vector3d& p_map) const;
+  /// Sum over `base_points` (base_link frame) placed at `pose` [nats].
+  double score(const PointList& base_points, const Pose6& pose) const;
+  /// Floored log-likelihood of a point in the single cell containing it (no interpolation).
+  double cellLogLikelihood(const Eigen::Vector3d& p_map) const;
+
+ private:
+  double floored(const CellIndex& c, double z) const;
+  double kernel(double d_cells) const;
+  static constexpr int kKernelTableSize = 1538;        // covers [0, 1.5] cells and one guard entry
+  static constexpr double kKernelTableScale = 1024.0;  // entries per cell
+  const ChunkMap& map_;
+  double floor_;
+  RasterWindow window_;
+  std::vector<double> kernel_table_;
+};
+
+}  // namespace gmm_localization

@@ -1,0 +1,61 @@
+#pragma once
+// Searches over the discretised x, y, heading space of a SearchProblem:
+//  - exhaustiveSearch: paper Algorithm 2, the reference;
+//  - branchAndBoundSearch: paper Algorithm 3, best-first over the multiresolution layers.
+// Both maximise the base-layer score (the sum of quantized rasterized log-likelihoods, Eq. 1)
+// and break ties identically: the smallest (heading index, ty, tx). Branch-and-bound therefore
+// returns exactly the exhaustive optimum: each layer is an upper bound of the layer below over
+// the node's block, and nodes are popped by (bound desc, first-leaf key asc).
+
+#include <cstdint>
+#include <vector>
+
+#include "gmm_localization/core/matching/search_problem.h"
+
+namespace gmm_localization {
+
+struct SearchStats {
+  int64_t evaluations = 0;                     ///< node scores computed, all layers
+  std::vector<int64_t> evaluations_per_layer;  ///< index = layer
+  int64_t exhaustive_poses = 0;                ///< poses Algorithm 2 scores for this window
+  int64_t queue_peak = 0;                      ///< largest priority queue size
+  int top_layer = 0;
+  /// evaluations / exhaustive_poses
+  double fraction() const {
+    return exhaustive_poses > 0 ? static_cast<double>(evaluations) / exhaustive_poses : 0.0;
+  }
+};
+
+struct SearchOutcome {
+  int heading_index = 0;
+  int tx = 0;
+  int ty = 0;
+  Pose6 pose;
+  int64_t score = 0;            ///< quantized base-layer score
+  double log_likelihood = 0.0;  ///< score converted to nats (Eq. 1 with the floor)
+  SearchStats stats;
+};
+
+/// One node the branch-and-bound scored (for the paper's Fig. 9 traversal picture).
+struct TraversalNode {
+  int16_t layer;
+  int16_t heading_index;
+  int16_t tx;
+  int16_t ty;
+  int64_t bound;
+};
+
+struct BranchAndBoundOptions {
+  /// Score the prior (window centre) first and never queue nodes whose bound is below it:
+  /// the optimum's ancestors all bound at least the prior's score, so nothing is lost.
+  bool prior_as_incumbent = true;
+};
+
+SearchOutcome exhaustiveSearch(const SearchProblem& problem);
+
+/// Paper Algorithm 3. `traversal`, when given, receives every node scored.
+SearchOutcome branchAndBoundSearch(const SearchProblem& problem,
+                                   const BranchAndBoundOptions& options = {},
+                                   std::vector<TraversalNode>* traversal = nullptr);
+
+}  // namespace gmm_localization

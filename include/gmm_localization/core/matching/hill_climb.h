@@ -1,0 +1,51 @@
+#pragma once
+// Paper Algorithm 1, line 2: a constrained 6-DOF hill climb on the exact likelihood, from the
+// search's discrete optimum, for sub-cell x, y and heading and for z, roll and pitch.
+
+#include <cstddef>
+#include <string>
+
+#include "gmm_localization/core/matching/exact_scorer.h"
+
+namespace gmm_localization {
+
+struct HillClimbOptions {
+  /// Largest change from the start in x and y [m], in heading [rad], in z [m] and in roll and
+  /// pitch [rad]: the search's cell and heading step leave the optimum within about one step;
+  /// z, roll and pitch start from the prior.
+  double max_xy_m = 0.3;
+  double max_yaw_rad = 0.012;
+  double max_z_m = 0.5;
+  double max_roll_pitch_rad = 0.035;
+  /// First and smallest pattern steps [m] and [rad]: steps halve when no move improves.
+  double initial_xy_step_m = 0.08;
+  double initial_z_step_m = 0.04;
+  double initial_angle_step_rad = 0.003;
+  double min_xy_step_m = 0.005;
+  double min_z_step_m = 0.005;
+  double min_angle_step_rad = 0.0002;
+  int max_evaluations = 400;
+  /// Coarse-to-fine: climb first on this many evenly spaced points down to 4x the smallest
+  /// steps, then on all points from there (about half the point evaluations of a single climb
+  /// on all points, same optimum in practice). 0, or fewer than twice this many points: one
+  /// climb on all points.
+  size_t coarse_points = 750;
+
+  std::string validate() const;
+};
+
+struct HillClimbOutcome {
+  Pose6 pose;
+  double score_start = 0.0;  ///< exact log-likelihood at the start [nats]
+  double score = 0.0;        ///< at the result [nats]
+  int evaluations = 0;
+  bool hit_limit = false;  ///< some coordinate ended on its constraint
+};
+
+/// Coordinate pattern search over (x, y, z, roll, pitch, yaw) maximising scorer.score(points,
+/// pose) within the box around `start`, coarse-to-fine (options.coarse_points). Deterministic;
+/// never returns a worse pose than start (scored on all points).
+HillClimbOutcome hillClimb(const ExactScorer& scorer, const PointList& base_points,
+                           const Pose6& start, const HillClimbOptions& options);
+
+}  // namespace gmm_localization

@@ -1,0 +1,108 @@
+#pragma once
+// Full registration, paper Algorithm 1: filter and level the scan, align its height to the map,
+// search x, y, heading exhaustively-optimally by branch-and-bound over the rasterized
+// multiresolution map, hill-climb 6-DOF on the exact likelihood, estimate the covariance from
+// the explored space, and label obstacles.
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "gmm_localization/core/common/result.h"
+#include "gmm_localization/core/matching/grid_search.h"
+#include "gmm_localization/core/matching/hill_climb.h"
+#include "gmm_localization/core/matching/match_covariance.h"
+#include "gmm_localization/core/matching/obstacle_classifier.h"
+#include "gmm_localization/core/matching/scan_filter.h"
+
+namespace gmm_localization {
+
+struct RegistrationOptions {
+  ScanFilterOptions filter;           ///< scan preparation for the search
+  size_t refine_max_points = 3000;    ///< points the hill climb scores (evenly thinned); the
+                                      ///< matcher config uses 1500 (faster, 2 mm coarser)
+  double heading_step_rad = 0.00873;  ///< search heading resolution [rad] (0.5 deg)
+  double z_search_m = 1.0;  ///< height pre-alignment range +- around the prior [m]; 0: off
+  bool exhaustive = false;  ///< Algorithm 2 instead of branch-and-bound (reference, slow)
+  BranchAndBoundOptions branch_and_bound;
+  HillClimbOptions hill_climb;
+  CovarianceOptions covariance;
+  bool classify_obstacles = true;
+  ObstacleOptions obstacles;
+  /// A match is rejected when less than this share of the search points lies over non-empty
+  /// map cells at the result (the scan is mostly off the map).
+  double min_map_coverage = 0.2;
+
+  std::string validate() const;
+};
+
+struct MatchRequest {
+  Pose6 prior;             ///< initial guess of base_link in the map frame
+  double half_x_m = 12.5;  ///< search window half extents [m]
+  double half_y_m = 12.5;
+  double half_heading_rad = 0.26;  ///< [rad]
+};
+
+struct MatchResult {
+  Pose6 pose;                      ///< registered base_link pose in the map frame
+  Eigen::Matrix3d covariance_xyh;  ///< x [m], y [m], yaw [rad]
+  SearchOutcome search;            ///< discrete optimum and search statistics
+  HillClimbOutcome refinement;
+  MatchCovariance covariance_detail;
+  FilteredScan filtered;                  ///< counters and the search points
+  double z_offset_m = 0.0;                ///< height pre-alignment applied to the prior [m]
+  double map_coverage = 0.0;              ///< share of search points over non-empty cells
+  double log_likelihood_per_point = 0.0;  ///< exact, at the result [nats]
+  ObstacleLabels obstacles;               ///< one label per input point (when enabled)
+};
+
+/// Stage durations [s], filled when the caller supplies a clock (the core reads none itself).
+struct RegistrationTiming {
+  double filter_s = 0;  ///< filtering, height pre-alignment, per-heading rotation
+  double search_s = 0, refine_s = 0, covariance_s = 0, obstacles_s = 0;
+};
+
+/// The first stage of a match: the filtered scan, its height pre-alignment and the search
+/// problem (rotated, discretised points) over the request's window.
+struct PreparedSearch {
+  FilteredScan filtered;
+  double z_offset_m = 0.0;
+  SearchProblem problem;
+};
+
+class Registration {
+ public:
+  explicit Registration(const RegistrationOptions& options) : options_(options) {}
+  const RegistrationOptions& options() const { return options_; }
+
+  /// Registers `base_points` (base_link frame [m]) against `map`. Fails with a reason, never
+  /// with a pose, for: invalid options or request, no points after filtering, scan off the
+  /// loaded map, too little map coverage at the result, or a non-finite result.
+  /// `traversal` receives the branch-and-bound's scored nodes (Fig. 9); `now` (seconds, any
+  /// epoch) enables `timing`.
+  Result<MatchResult> match(const ChunkMap& map, const PointList& base_points,
+                            const MatchRequest& request,
+                            std::vector<TraversalNode>* traversal = nullptr,
+                            const std::function<double()>& now = nullptr,
+                            RegistrationTiming* timing = nullptr) const;
+
+  /// The stages of match(), for tools that time or compare them (the benchmark runs both
+  /// searches on one prepared problem). Same failures as match().
+  Result<PreparedSearch> prepare(const ChunkMap& map, const PointList& base_points,
+                                 const MatchRequest& request) const;
+  /// Refinement, covariance, coverage check and obstacles after a search of `prepared`.
+  Result<MatchResult> finish(const ChunkMap& map, const PointList& base_points,
+                             const MatchRequest& request, PreparedSearch prepared,
+                             const SearchOutcome& search, const std::function<double()>& now,
+                             RegistrationTiming* timing) const;
+
+ private:
+  RegistrationOptions options_;
+};
+
+/// Height offset [m] (a multiple of the z step within +-range_m) that maximises the base-layer
+/// score of the levelled points at `prior`; 0 when nothing scores.
+double bestHeightOffset(const ChunkMap& map, const PointList& levelled_points, const Pose6& prior,
+                        double range_m);
+
+}  // namespace gmm_localization

@@ -1,0 +1,221 @@
+#include "gmm_localization/core/localization/match_policy.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include <Eigen/Eigenvalues>
+
+#include "gmm_localization/core/common/option_checks.h"
+
+namespace gmm_localization {
+namespace {
+
+template <typename... Checks>
+std::string firstError(const Checks&... checks) {
+  for (const std::string& e : {checks...}) {
+    if (!e.empty()) return e;
+  }
+  return {};
+}
+
+/// Standard deviation of a variance; +inf for a non-finite one (the widest window).
+double sigmaOf(double variance) {
+  if (!std::isfinite(variance)) return std::numeric_limits<double>::infinity();
+  return std::sqrt(std::max(0.0, variance));
+}
+
+double clampSigma(double k_sigma, double lo, double hi) {
+  if (!std::isfinite(k_sigma)) return hi;
+  return std::min(hi, std::max(lo, k_sigma));
+}
+
+std::string formatted(const char* what, double value, const char* relation, double limit) {
+  std::ostringstream s;
+  s.precision(4);
+  s << what << " " << value << " " << relation << " " << limit;
+  return s.str();
+}
+
+}  // namespace
+
+std::string WindowPolicyOptions::validate() const {
+  std::string e =
+      firstError(rangeProblem("window.sigma_multiplier", sigma_multiplier, 0.5, 10.0),
+                 rangeProblem("window.min_half_xy_m", min_half_xy_m, 0.2, 100.0),
+                 rangeProblem("window.max_half_xy_m", max_half_xy_m, 0.2, 100.0),
+                 rangeProblem("window.min_half_heading_rad", min_half_heading_rad, 0.0, 1.6),
+                 rangeProblem("window.max_half_heading_rad", max_half_heading_rad, 0.0, 1.6),
+                 rangeProblem("window.wide_half_xy_m", wide_half_xy_m, 0.2, 100.0),
+                 rangeProblem("window.wide_half_heading_rad", wide_half_heading_rad, 0.0, 1.6),
+                 rangeProblem("window.unknown_z_search_m", unknown_z_search_m, 0.0, 20.0));
+  if (!e.empty()) return e;
+  if (min_half_xy_m > max_half_xy_m) return "window.min_half_xy_m must be <= max_half_xy_m";
+  if (min_half_heading_rad > max_half_heading_rad) {
+    return "window.min_half_heading_rad must be <= max_half_heading_rad";
+  }
+  return {};
+}
+
+std::string AcceptancePolicyOptions::validate() const {
+  return firstError(rangeProblem("acceptance.min_log_likelihood_per_point",
+                                 min_log_likelihood_per_point, -100.0, 10.0),
+                    rangeProblem("acceptance.min_map_coverage", min_map_coverage, 0.0, 1.0),
+                    rangeProblem("acceptance.max_sigma_xy_m", max_sigma_xy_m, 0.0, 1000.0),
+                    rangeProblem("acceptance.max_sigma_yaw_rad", max_sigma_yaw_rad, 0.0, 10.0));
+}
+
+std::string PoseCovariancePolicyOptions::validate() const {
+  return firstError(
+      rangeProblem("covariance.search_covariance_scale", search_covariance_scale, 1e-3, 1e3),
+      rangeProblem("covariance.fixed_sigma_xy_m", fixed_sigma_xy_m, 1e-4, 100.0),
+      rangeProblem("covariance.fixed_sigma_yaw_rad", fixed_sigma_yaw_rad, 1e-5, 3.2),
+      rangeProblem("covariance.min_sigma_xy_m", min_sigma_xy_m, 1e-4, 100.0),
+      rangeProblem("covariance.min_sigma_yaw_rad", min_sigma_yaw_rad, 1e-5, 3.2),
+      rangeProblem("covariance.sigma_z_m", sigma_z_m, 1e-4, 100.0),
+      rangeProblem("covariance.sigma_roll_pitch_rad", sigma_roll_pitch_rad, 1e-5, 3.2));
+}
+
+std::string RelocalizationPolicyOptions::validate() const {
+  return firstError(
+      rangeProblem("relocalization.max_consecutive_rejections", max_consecutive_rejections, 1, 1e6),
+      rangeProblem("relocalization.max_posterior_age_s", max_posterior_age_s, 0.0, 60.0),
+      rangeProblem("relocalization.max_previous_match_age_s", max_previous_match_age_s, 0.0, 600.0),
+      rangeProblem("relocalization.previous_match_sigma_growth_mps",
+                   previous_match_sigma_growth_mps, 0.0, 100.0),
+      rangeProblem("relocalization.max_stale_prior_age_s", max_stale_prior_age_s, 0.0, 1e6));
+}
+
+std::string LocalizationPolicyOptions::validate() const {
+  return firstError(window.validate(), acceptance.validate(), covariance.validate(),
+                    relocalization.validate());
+}
+
+const char* priorSourceName(PriorSource source) {
+  switch (source) {
+    case PriorSource::kEkf:
+      return "ekf";
+    case PriorSource::kInitialPose:
+      return "initialpose";
+    case PriorSource::kConfigured:
+      return "configured";
+    case PriorSource::kPreviousMatch:
+      return "previous_match";
+    default:
+      return "none";
+  }
+}
+
+WindowExtent searchWindowFor(const Prior& prior, const WindowPolicyOptions& o) {
+  WindowExtent w;
+  if (prior.wide && prior.wide_window.half_x_m > 0.0) return prior.wide_window;
+  if (prior.wide) {
+    w.half_x_m = w.half_y_m = o.wide_half_xy_m;
+    w.half_heading_rad = o.wide_half_heading_rad;
+    return w;
+  }
+  // Paper V-B: the search is initialised around the 3-sigma posterior belief.
+  const Eigen::Matrix3d& c = prior.covariance_xyh;
+  const double k = o.sigma_multiplier;
+  w.half_x_m = clampSigma(k * sigmaOf(c(0, 0)), o.min_half_xy_m, o.max_half_xy_m);
+  w.half_y_m = clampSigma(k * sigmaOf(c(1, 1)), o.min_half_xy_m, o.max_half_xy_m);
+  w.half_heading_rad =
+      clampSigma(k * sigmaOf(c(2, 2)), o.min_half_heading_rad, o.max_half_heading_rad);
+  return w;
+}
+
+SearchWindow discreteWindow(const MatchRequest& request, double heading_step_rad,
+                            double resolution_m) {
+  return SearchWindow::fromExtent(request.prior, request.half_x_m, request.half_y_m,
+                                  request.half_heading_rad, heading_step_rad, resolution_m);
+}
+
+AcceptanceDecision acceptMatch(const MatchResult& r, const SearchWindow& window,
+                               const AcceptancePolicyOptions& o) {
+  AcceptanceDecision d;
+  const Pose6& p = r.pose;
+  if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) && std::isfinite(p.roll) &&
+        std::isfinite(p.pitch) && std::isfinite(p.yaw) && r.covariance_xyh.allFinite())) {
+    d.reason = "non-finite pose or covariance";
+    return d;
+  }
+  if (r.map_coverage < o.min_map_coverage) {
+    d.reason = formatted("map coverage", r.map_coverage, "below", o.min_map_coverage);
+    return d;
+  }
+  if (!(r.log_likelihood_per_point >= o.min_log_likelihood_per_point)) {
+    d.reason = formatted("log-likelihood per point", r.log_likelihood_per_point, "below",
+                         o.min_log_likelihood_per_point);
+    return d;
+  }
+  const double sx = std::sqrt(std::max(0.0, r.covariance_xyh(0, 0)));
+  const double sy = std::sqrt(std::max(0.0, r.covariance_xyh(1, 1)));
+  const double sh = std::sqrt(std::max(0.0, r.covariance_xyh(2, 2)));
+  if (std::max(sx, sy) > o.max_sigma_xy_m) {
+    d.reason =
+        formatted("ambiguous: search sigma xy [m]", std::max(sx, sy), "above", o.max_sigma_xy_m);
+    return d;
+  }
+  if (sh > o.max_sigma_yaw_rad) {
+    d.reason = formatted("ambiguous: search sigma yaw [rad]", sh, "above", o.max_sigma_yaw_rad);
+    return d;
+  }
+  if (o.reject_on_window_edge) {
+    const SearchOutcome& s = r.search;
+    const bool edge_x = window.half_x > 0 && (s.tx == 0 || s.tx == 2 * window.half_x);
+    const bool edge_y = window.half_y > 0 && (s.ty == 0 || s.ty == 2 * window.half_y);
+    const bool edge_h =
+        window.half_h > 0 && (s.heading_index == 0 || s.heading_index == 2 * window.half_h);
+    if (edge_x || edge_y || edge_h) {
+      d.reason = std::string("optimum on the search window's edge (") + (edge_x ? "x " : "") +
+                 (edge_y ? "y " : "") + (edge_h ? "heading " : "") +
+                 "): the prior may be too far off";
+      return d;
+    }
+  }
+  d.accepted = true;
+  return d;
+}
+
+Matrix6d publishedPoseCovariance(const Eigen::Matrix3d& search,
+                                 const PoseCovariancePolicyOptions& o) {
+  Eigen::Matrix3d xyh = Eigen::Matrix3d::Zero();
+  const bool usable = o.use_search_covariance && search.allFinite();
+  if (usable) {
+    xyh = 0.5 * (search + search.transpose()) * o.search_covariance_scale;
+  } else {
+    xyh.diagonal() << o.fixed_sigma_xy_m * o.fixed_sigma_xy_m,
+        o.fixed_sigma_xy_m * o.fixed_sigma_xy_m, o.fixed_sigma_yaw_rad * o.fixed_sigma_yaw_rad;
+  }
+  // Floors: raise a too small diagonal entry, scaling its correlations so the matrix stays
+  // positive semi-definite (D^T C D with D >= 1), then make sure it is positive definite.
+  const double floors[3] = {o.min_sigma_xy_m, o.min_sigma_xy_m, o.min_sigma_yaw_rad};
+  Eigen::Vector3d scale = Eigen::Vector3d::Ones();
+  for (int i = 0; i < 3; ++i) {
+    const double var = xyh(i, i);
+    const double min_var = floors[i] * floors[i];
+    if (!(var >= min_var)) scale(i) = var > 0.0 ? std::sqrt(min_var / var) : 0.0;
+  }
+  for (int i = 0; i < 3; ++i) {
+    if (scale(i) == 0.0) {  // a zero (or negative) variance: drop its correlations
+      xyh.row(i).setZero();
+      xyh.col(i).setZero();
+      xyh(i, i) = floors[i] * floors[i];
+      scale(i) = 1.0;
+    }
+  }
+  xyh = scale.asDiagonal() * xyh * scale.asDiagonal();
+  // Guard against indefinite input (only possible with strongly inconsistent search output).
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(xyh);
+  if (eig.eigenvalues().minCoeff() <= 0.0) {
+    xyh = xyh.diagonal().asDiagonal();
+  }
+
+  Matrix6d c = poseCovarianceFromPlanar(xyh);
+  c(2, 2) = o.sigma_z_m * o.sigma_z_m;  // z, roll, pitch of (x, y, z, roll, pitch, yaw)
+  c(3, 3) = c(4, 4) = o.sigma_roll_pitch_rad * o.sigma_roll_pitch_rad;
+  return c;
+}
+
+}  // namespace gmm_localization

@@ -1,0 +1,110 @@
+#include "gmm_localization/core/localization/match_processor.h"
+
+#include <cmath>
+
+namespace gmm_localization {
+namespace {
+
+double wrap(double a) { return std::atan2(std::sin(a), std::cos(a)); }
+
+}  // namespace
+
+const char* matchOutcomeName(MatchOutcome outcome) {
+  switch (outcome) {
+    case MatchOutcome::kAccepted:
+      return "accepted";
+    case MatchOutcome::kRejected:
+      return "rejected";
+    default:
+      return "skipped";
+  }
+}
+
+Result<MatchProcessor> MatchProcessor::create(const RegistrationOptions& registration,
+                                              const LocalizationPolicyOptions& policy) {
+  std::string e = registration.validate();
+  if (!e.empty()) return Result<MatchProcessor>::failure("registration: " + e);
+  e = policy.validate();
+  if (!e.empty()) return Result<MatchProcessor>::failure("policy: " + e);
+  RegistrationOptions unknown_z = registration;
+  unknown_z.z_search_m = std::max(registration.z_search_m, policy.window.unknown_z_search_m);
+  return MatchProcessor(registration, unknown_z, policy);
+}
+
+MatchReport MatchProcessor::process(const ChunkMap& map, ScanInput scan, const Prior& prior,
+                                    const BodyTwist* twist, bool want_traversal,
+                                    const std::function<double()>& now) const {
+  const double t0 = now ? now() : 0.0;
+  MatchReport r;
+  r.stamp_s = scan.stamp_s;
+  r.prior = prior;
+  r.input_points = scan.points.size();
+  size_t finite = 0;
+  for (const Eigen::Vector3f& p : scan.points) finite += p.allFinite() ? 1 : 0;
+  r.dropped_nonfinite = r.input_points - finite;
+  auto finish = [&](MatchOutcome outcome, std::string reason) {
+    r.outcome = outcome;
+    r.reason = std::move(reason);
+    r.points = std::move(scan.points);
+    if (now) r.total_s = now() - t0;
+    return r;
+  };
+
+  if (!std::isfinite(scan.stamp_s)) return finish(MatchOutcome::kSkipped, "scan stamp not finite");
+  if (!prior.valid()) {
+    return finish(MatchOutcome::kSkipped,
+                  "no prior: waiting for an initial pose (/initialpose or the configured pose) "
+                  "or the EKF posterior");
+  }
+  if (map.size() == 0) return finish(MatchOutcome::kSkipped, "no map: no chunks received yet");
+  if (finite == 0) {
+    return finish(MatchOutcome::kSkipped, "scan has no finite points (" +
+                                              std::to_string(r.input_points) + " in the cloud)");
+  }
+
+  // Motion compensation: every point moved into base_link at the stamp.
+  if (twist != nullptr && !scan.time_s.empty()) {
+    if (deskew(scan.points, scan.time_s, twist->linear_mps, twist->angular_radps)) {
+      r.deskewed = true;
+    }
+  }
+
+  r.window = searchWindowFor(prior, policy_.window);
+  MatchRequest request;
+  request.prior = prior.pose;
+  request.half_x_m = r.window.half_x_m;
+  request.half_y_m = r.window.half_y_m;
+  request.half_heading_rad = r.window.half_heading_rad;
+  const Registration& registration = prior.z_known ? tracking_ : unknown_z_;
+  std::vector<TraversalNode>* traversal = want_traversal ? &r.traversal : nullptr;
+  auto match = registration.match(map, scan.points, request, traversal, now, &r.timing);
+  if (!match.ok()) {
+    // Off the map, too little coverage, empty after filtering: a failed attempt (counts
+    // towards relocalization only when points were left to search with).
+    const bool no_points = match.error().find("no points left") != std::string::npos;
+    return finish(no_points ? MatchOutcome::kSkipped : MatchOutcome::kRejected, match.error());
+  }
+  r.has_result = true;
+  r.result = std::move(match).value();
+  const MatchResult& m = r.result;
+  r.search_points = m.filtered.points.size();
+  r.dropped_nonfinite = m.filtered.dropped_nonfinite;
+  // The window actually searched is centred on the height-aligned prior.
+  MatchRequest aligned = request;
+  aligned.prior.z += m.z_offset_m;
+  r.search_window =
+      discreteWindow(aligned, registration.options().heading_step_rad, map.geometry().resolution_m);
+  r.correction_xy_m = std::hypot(m.pose.x - prior.pose.x, m.pose.y - prior.pose.y);
+  r.correction_yaw_rad = wrap(m.pose.yaw - prior.pose.yaw);
+
+  const AcceptanceDecision d = acceptMatch(m, r.search_window, policy_.acceptance);
+  if (!d.accepted) return finish(MatchOutcome::kRejected, d.reason);
+  r.pose = m.pose;
+  r.covariance = publishedPoseCovariance(m.covariance_xyh, policy_.covariance);
+  if (!r.covariance.allFinite()) {
+    return finish(MatchOutcome::kRejected, "numerical failure: non-finite covariance");
+  }
+  return finish(MatchOutcome::kAccepted, {});
+}
+
+}  // namespace gmm_localization

@@ -1,0 +1,105 @@
+#include "gmm_localization/core/matching/exact_scorer.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace gmm_localization {
+
+namespace {
+RasterWindow windowAround(const ChunkMap& map, double x, double y, double r) {
+  const CellIndex lo = map.geometry().cellAt(x - r, y - r);
+  const CellIndex hi = map.geometry().cellAt(x + r, y + r);
+  return RasterWindow(map, lo.x, lo.y, hi.x, hi.y);
+}
+}  // namespace
+
+ExactScorer::ExactScorer(const ChunkMap& map, double ll_floor, double center_x_m, double center_y_m,
+                         double radius_m, double kernel_sigma_m)
+    : map_(map), floor_(ll_floor), window_(windowAround(map, center_x_m, center_y_m, radius_m)) {
+  // Kernel width in cell units; at most a cell so the 3 x 3 neighbourhood holds the kernel.
+  const double s = std::clamp(kernel_sigma_m / map.geometry().resolution_m, 0.05, 1.0);
+  const double inv_two_s2 = 1.0 / (2.0 * s * s);
+  kernel_table_.resize(kKernelTableSize);
+  for (int i = 0; i < kKernelTableSize; ++i) {
+    const double d = i / kKernelTableScale;
+    kernel_table_[i] = std::exp(-d * d * inv_two_s2);
+  }
+}
+
+double ExactScorer::floored(const CellIndex& c, double z) const {
+  const MapChunk* chunk = window_.chunk(c.x, c.y);
+  if (chunk == nullptr || !chunk->hasMixtures()) return floor_;
+  const int mask = chunk->cells() - 1;
+  const MixtureLogTerms& g =
+      chunk->logTerms(static_cast<int>(c.x & mask), static_cast<int>(c.y & mask));
+  if (g.count == 0) return floor_;
+  return std::max(floor_, g.logLikelihood(z));
+}
+
+double ExactScorer::cellLogLikelihood(const Eigen::Vector3d& p) const {
+  return floored(map_.geometry().cellAt(p.x(), p.y()), p.z());
+}
+
+double ExactScorer::pointLogLikelihood(const Eigen::Vector3d& p) const {
+  // Gaussian-weighted mean of the floored log-likelihoods of the 3 x 3 cells around the point,
+  // weights exp(-d^2 / (2 s^2)) of the distance d from the point to each cell centre: smooth in
+  // x, y, and unbiased for structure between cell centres (a bilinear interpolation peaks at
+  // cell centres and pulls walls onto them). The weights are separable: w = wx * wy.
+  const MapGeometry& g = map_.geometry();
+  const double u = (p.x() - g.origin_x_m) / g.resolution_m;
+  const double v = (p.y() - g.origin_y_m) / g.resolution_m;
+  const double fu = std::floor(u), fv = std::floor(v);
+  const int64_t cx = static_cast<int64_t>(fu), cy = static_cast<int64_t>(fv);
+  const double fx = u - fu - 0.5, fy = v - fv - 0.5;  // offset from the cell centre, in cells
+  double wx[3], wy[3];
+  for (int k = 0; k < 3; ++k) {
+    wx[k] = kernel(fx - (k - 1));
+    wy[k] = kernel(fy - (k - 1));
+  }
+  const double z = p.z();
+  double ll[9];
+  const MapChunk* chunk = window_.chunk(cx, cy);
+  const int64_t mask = chunk != nullptr ? chunk->cells() - 1 : 0;
+  const int64_t lx = cx & mask, ly = cy & mask;
+  if (chunk != nullptr && chunk->hasMixtures() && lx >= 1 && ly >= 1 && lx + 1 <= mask &&
+      ly + 1 <= mask) {
+    // The whole 3 x 3 block lies in one chunk.
+    for (int ky = 0; ky < 3; ++ky) {
+      for (int kx = 0; kx < 3; ++kx) {
+        const MixtureLogTerms& t =
+            chunk->logTerms(static_cast<int>(lx + kx - 1), static_cast<int>(ly + ky - 1));
+        ll[ky * 3 + kx] = t.count == 0 ? floor_ : std::max(floor_, t.logLikelihood(z));
+      }
+    }
+  } else {
+    for (int ky = 0; ky < 3; ++ky) {
+      for (int kx = 0; kx < 3; ++kx) ll[ky * 3 + kx] = floored({cx + kx - 1, cy + ky - 1}, z);
+    }
+  }
+  double acc = 0.0, wsum = 0.0;
+  for (int ky = 0; ky < 3; ++ky) {
+    for (int kx = 0; kx < 3; ++kx) {
+      const double w = wx[kx] * wy[ky];
+      acc += w * ll[ky * 3 + kx];
+      wsum += w;
+    }
+  }
+  return acc / wsum;
+}
+
+double ExactScorer::kernel(double d) const {
+  // exp(-d^2 / (2 s^2)) for |d| <= 1.5 cells, from a table with linear interpolation.
+  const double x = std::min(std::abs(d), 1.5) * kKernelTableScale;
+  const int i = std::min(static_cast<int>(x), kKernelTableSize - 2);
+  const double a = x - i;
+  return kernel_table_[i] + a * (kernel_table_[i + 1] - kernel_table_[i]);
+}
+
+double ExactScorer::score(const PointList& base_points, const Pose6& pose) const {
+  const Eigen::Isometry3d T = toIsometry(pose);
+  double sum = 0.0;
+  for (const Eigen::Vector3f& q : base_points) sum += pointLogLikelihood(T * q.cast<double>());
+  return sum;
+}
+
+}  // namespace gmm_localization

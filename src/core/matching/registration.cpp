@@ -1,0 +1,213 @@
+#include "gmm_localization/core/matching/registration.h"
+
+#include <algorithm>
+#include <climits>
+#include <cmath>
+
+#include <Eigen/Geometry>
+
+namespace gmm_localization {
+
+std::string RegistrationOptions::validate() const {
+  std::string e = filter.validate();
+  if (!e.empty()) return "filter: " + e;
+  if (!(heading_step_rad > 0.0 && heading_step_rad < 0.2)) {
+    return "heading_step_rad=" + std::to_string(heading_step_rad) + " must be in (0, 0.2)";
+  }
+  if (!(z_search_m >= 0.0 && z_search_m <= 20.0)) {
+    return "z_search_m=" + std::to_string(z_search_m) + " must be in [0, 20]";
+  }
+  if (refine_max_points < 10) return "refine_max_points must be >= 10";
+  e = hill_climb.validate();
+  if (!e.empty()) return "hill_climb: " + e;
+  e = covariance.validate();
+  if (!e.empty()) return "covariance: " + e;
+  if (!(min_map_coverage >= 0.0 && min_map_coverage <= 1.0)) {
+    return "min_map_coverage must be in [0, 1]";
+  }
+  return {};
+}
+
+double bestHeightOffset(const ChunkMap& map, const PointList& points, const Pose6& prior,
+                        double range_m) {
+  const double step = map.options().z_step_m;
+  const int n = static_cast<int>(std::floor(range_m / step));
+  if (n <= 0 || points.empty()) return 0.0;
+  const double c = std::cos(prior.yaw), s = std::sin(prior.yaw);
+  struct Cell {
+    int64_t gx, gy;
+    int32_t zb;
+  };
+  std::vector<Cell> cells(points.size());
+  int64_t gx_min = INT64_MAX, gy_min = INT64_MAX, gx_max = INT64_MIN, gy_max = INT64_MIN;
+  for (size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3f& q = points[i];
+    const CellIndex cell =
+        map.geometry().cellAt(prior.x + c * q.x() - s * q.y(), prior.y + s * q.x() + c * q.y());
+    cells[i] = {cell.x, cell.y, map.zBin(prior.z + q.z())};
+    gx_min = std::min(gx_min, cell.x);
+    gx_max = std::max(gx_max, cell.x);
+    gy_min = std::min(gy_min, cell.y);
+    gy_max = std::max(gy_max, cell.y);
+  }
+  // Direct table reads through a chunk grid (no per-point chunk hash look-up).
+  const RasterWindow raster(map, gx_min, gy_min, gx_max, gy_max);
+  const int64_t mask = (int64_t{1} << raster.shift()) - 1;
+  std::vector<int64_t> score(2 * n + 1, 0);
+  for (const Cell& p : cells) {
+    const MapChunk* chunk = raster.chunk(p.gx, p.gy);
+    if (chunk == nullptr) continue;
+    const RasterLayer& L = chunk->layer(0);
+    const size_t i =
+        (static_cast<size_t>(p.gy & mask) << raster.shift()) + static_cast<size_t>(p.gx & mask);
+    for (int k = -n; k <= n; ++k) score[k + n] += MapChunk::spanValue(L, i, p.zb + k);
+  }
+  // Ties prefer the smallest |offset|.
+  int best = n;
+  for (int k = 0; k <= 2 * n; ++k) {
+    if (score[k] > score[best] ||
+        (score[k] == score[best] && std::abs(k - n) < std::abs(best - n))) {
+      best = k;
+    }
+  }
+  return score[best] > 0 ? (best - n) * step : 0.0;
+}
+
+namespace {
+
+PointList thin(const PointList& pts, size_t max_points) {
+  if (pts.size() <= max_points) return pts;
+  PointList out;
+  out.reserve(max_points);
+  const double stride = static_cast<double>(pts.size()) / max_points;
+  for (size_t i = 0; i < max_points; ++i) out.push_back(pts[static_cast<size_t>(i * stride)]);
+  return out;
+}
+
+bool finitePose(const Pose6& p) {
+  return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) && std::isfinite(p.roll) &&
+         std::isfinite(p.pitch) && std::isfinite(p.yaw);
+}
+
+double wrapAngle(double a) { return std::atan2(std::sin(a), std::cos(a)); }
+
+}  // namespace
+
+Result<PreparedSearch> Registration::prepare(const ChunkMap& map, const PointList& base_points,
+                                             const MatchRequest& request) const {
+  using R = Result<PreparedSearch>;
+  const std::string invalid = options_.validate();
+  if (!invalid.empty()) return R::failure("registration options: " + invalid);
+  if (!finitePose(request.prior)) return R::failure("prior pose is not finite");
+  FilteredScan f =
+      filterScan(base_points, request.prior.roll, request.prior.pitch, options_.filter);
+  if (f.points.empty()) {
+    return R::failure("no points left after filtering: " + std::to_string(f.input_points) +
+                      " input, " + std::to_string(f.dropped_nonfinite) + " non-finite, " +
+                      std::to_string(f.dropped_range) + " out of range, " +
+                      std::to_string(f.dropped_height) + " out of the height band");
+  }
+  // Height pre-alignment, then the window over x, y, heading around the (raised) prior.
+  Pose6 prior = request.prior;
+  const double z_offset = bestHeightOffset(map, f.points, prior, options_.z_search_m);
+  prior.z += z_offset;
+  const SearchWindow window =
+      SearchWindow::fromExtent(prior, request.half_x_m, request.half_y_m, request.half_heading_rad,
+                               options_.heading_step_rad, map.geometry().resolution_m);
+  auto problem = SearchProblem::create(map, f.points, window);
+  if (!problem.ok()) return R::failure(problem.error());
+  return PreparedSearch{std::move(f), z_offset, std::move(problem.value())};
+}
+
+Result<MatchResult> Registration::match(const ChunkMap& map, const PointList& base_points,
+                                        const MatchRequest& request,
+                                        std::vector<TraversalNode>* traversal,
+                                        const std::function<double()>& now,
+                                        RegistrationTiming* timing) const {
+  auto tick = [&]() { return now ? now() : 0.0; };
+  const double t0 = tick();
+  auto prepared = prepare(map, base_points, request);
+  if (!prepared.ok()) return Result<MatchResult>::failure(prepared.error());
+  const double t1 = tick();
+  // Algorithm 2 (reference) or 3 over x, y, heading.
+  const SearchProblem& problem = prepared->problem;
+  const SearchOutcome search =
+      options_.exhaustive ? exhaustiveSearch(problem)
+                          : branchAndBoundSearch(problem, options_.branch_and_bound, traversal);
+  if (timing) {
+    timing->filter_s = t1 - t0;
+    timing->search_s = tick() - t1;
+  }
+  return finish(map, base_points, request, std::move(prepared.value()), search, now, timing);
+}
+
+Result<MatchResult> Registration::finish(const ChunkMap& map, const PointList& base_points,
+                                         const MatchRequest& request, PreparedSearch prepared,
+                                         const SearchOutcome& search,
+                                         const std::function<double()>& now,
+                                         RegistrationTiming* timing) const {
+  using R = Result<MatchResult>;
+  auto tick = [&]() { return now ? now() : 0.0; };
+  const double t2 = tick();
+  MatchResult out;
+  out.search = search;
+  out.z_offset_m = prepared.z_offset_m;
+  out.filtered = std::move(prepared.filtered);
+  const FilteredScan& f = out.filtered;
+  // Constrained 6-DOF hill climb on the exact likelihood, on the unlevelled points.
+  const Eigen::Matrix3f unlevel =
+      (Eigen::AngleAxisd(request.prior.pitch, Eigen::Vector3d::UnitY()) *
+       Eigen::AngleAxisd(request.prior.roll, Eigen::Vector3d::UnitX()))
+          .toRotationMatrix()
+          .transpose()
+          .cast<float>();
+  PointList refine_points = thin(f.voxels, options_.refine_max_points);
+  for (Eigen::Vector3f& p : refine_points) p = unlevel * p;
+  double reach = 0.0;
+  for (const Eigen::Vector3f& p : refine_points) reach = std::max<double>(reach, p.norm());
+  const ExactScorer scorer(map, map.options().ll_floor, out.search.pose.x, out.search.pose.y,
+                           reach + 2.0);
+  HillClimbOptions hc = options_.hill_climb;
+  hc.max_yaw_rad = std::max(hc.max_yaw_rad, options_.heading_step_rad);
+  hc.max_xy_m = std::max(hc.max_xy_m, map.geometry().resolution_m);
+  out.refinement = hillClimb(scorer, refine_points, out.search.pose, hc);
+  out.pose = out.refinement.pose;
+  out.pose.yaw = wrapAngle(out.pose.yaw);
+  out.log_likelihood_per_point =
+      out.refinement.score / static_cast<double>(std::max<size_t>(1, refine_points.size()));
+  double t3 = tick();
+  if (timing) timing->refine_s = t3 - t2;
+
+  out.covariance_detail = searchCovariance(prepared.problem, out.search, options_.covariance);
+  out.covariance_xyh = out.covariance_detail.covariance;
+  double t4 = tick();
+  if (timing) timing->covariance_s = t4 - t3;
+
+  // Map coverage at the result: share of search points over non-empty cells.
+  {
+    const Eigen::Isometry3d T = toIsometry(out.pose);
+    size_t covered = 0;
+    for (const Eigen::Vector3f& p : refine_points) {
+      const Eigen::Vector3d m = T * p.cast<double>();
+      const GaussianMixture1D* g = map.mixture(map.geometry().cellAt(m.x(), m.y()));
+      covered += (g != nullptr && !g->empty()) ? 1 : 0;
+    }
+    out.map_coverage = static_cast<double>(covered) / refine_points.size();
+  }
+  if (out.map_coverage < options_.min_map_coverage) {
+    return R::failure("only " + std::to_string(static_cast<int>(100 * out.map_coverage)) +
+                      "% of the scan lies over mapped cells at the best pose (minimum " +
+                      std::to_string(static_cast<int>(100 * options_.min_map_coverage)) +
+                      "%): vehicle off the map or map not loaded");
+  }
+  if (!finitePose(out.pose) || !out.covariance_xyh.allFinite()) {
+    return R::failure("numerical failure: non-finite pose or covariance");
+  }
+  if (options_.classify_obstacles) {
+    out.obstacles = classifyObstacles(map, base_points, out.pose, options_.obstacles);
+  }
+  if (timing) timing->obstacles_s = tick() - t4;
+  return out;
+}
+
+}  // namespace gmm_localization

@@ -1,0 +1,337 @@
+#include "build_map/build_map_options.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <functional>
+#include <map>
+#include <sstream>
+
+namespace gmm_localization {
+namespace tools {
+
+const char* buildMapHelp() {
+  return R"(build_map: build a Gaussian mixture map (Wolcott & Eustice 2015, section III) from LIDAR data.
+
+Usage: build_map --output DIR INPUT [options]
+
+Input (exactly one):
+  --pcd FILE               a point-cloud map (PCD, any point type with x y z), e.g. from LIO-SAM
+                           or hdl_graph_slam, in the map frame. It has no sensor origins, so the
+                           range filter does not apply. PCL loads the whole file (the builder
+                           itself streams); it is fed in batches of --pcd-batch points (1000000).
+  --kitti DIR              KITTI-style scans: DIR/NNNNNN.bin, DIR/NNNNNN/points.bin or
+                           DIR/velodyne/NNNNNN.bin, float32 little-endian records
+    --kitti-fields F       auto | xyz | xyzi (auto: xyzi under velodyne/, else from the file
+                           size, 12 vs 16 bytes per point; a multiple of 48 bytes is ambiguous)
+    --poses FILE           poses: KITTI 3x4 rows (line i = scan i) or 'id x y z qx qy qz qw'
+                           lines (default DIR/graph.txt, else DIR/poses.txt)
+    --scans LIST           scans to use, e.g. 0,2,4-9 (default: every scan with a pose)
+    --kitti-calib FILE     KITTI odometry calib.txt: poses are camera-0 poses; map frame =
+                           first Velodyne frame (z up)
+  --bag FILE               a rosbag with sensor_msgs/PointCloud2 scans and their poses
+    --cloud-topic T        (/velodyne_points)
+    --pose-topic T         nav_msgs/Odometry, geometry_msgs/PoseStamped or
+                           PoseWithCovarianceStamped, interpolated to each scan's stamp
+                           (/ground_truth/odom)
+    --extrinsic X,Y,Z,ROLL,PITCH,YAW   or X,Y,Z,QX,QY,QZ,QW: the cloud frame in the pose's
+                           child frame [m, deg]. Default: /tf_static's edge between the two
+                           frames if the bag has it, identity if the frames are equal.
+    --max-pose-gap S       skip scans whose bracketing poses are further apart (0.25 s)
+    --every N              use every N-th scan (1)
+    --time-field NAME      per-point time [s after the stamp] used to deskew each scan with
+                           the interpolated poses (time); clouds without it are not deskewed
+    --no-deskew            ignore per-point times
+  --synthetic-street M     a generated straight street of M metres (facades, parked cars,
+                           trees, poles, awnings) scanned by a simulated 32-laser LIDAR
+    --seed N (1)  --scan-spacing M (1.0)  --azimuth-step DEG (0.2)
+
+Output:
+  --output DIR             map directory (created); refuses to replace a map unless --overwrite
+  --overwrite              replace the map in DIR (its manifest is removed first)
+
+Map (defaults follow the paper):
+  --resolution M           cell size (0.2)
+  --tile-size N            cells per tile edge (320)
+  --origin X,Y             map-frame corner of cell (0, 0) (0,0)
+  --k-max K                most Gaussians per cell, 1..3 (2)
+  --criterion C            model selection: icl | bic (icl; see em_fitter.h)
+  --sigma-floor M          smallest sigma, ~ sensor range noise (0.03)
+  --blur-sigma M           Gaussian blur with neighbouring columns (0.1; 0 = off)
+  --blur-radius N          blur half-width in cells (1)
+  --z-bin M                z histogram bin (0.01)
+  --min-own-points N       returns a cell needs in its own column (1)
+
+Filters (applied in this order; counts in the summary):
+  --min-range M, --max-range M   distance from the scan's sensor origin (1, 120); not for PCD
+  --min-z M, --max-z M     map-frame height band (unbounded)
+  --voxel M                per-scan voxel pre-filter edge, 0 = off (0)
+  --offset X,Y,Z           subtracted from every input point and pose, e.g. a UTM origin, to
+                           keep map coordinates small; recorded as the map's georeference
+  --datum TEXT             georeference text, e.g. "WGS84 / UTM zone 17N"
+
+Resources:
+  --threads N              fitting threads (2)
+  --temp-dir DIR           where the spill files go (default: inside --output)
+  --spill-buffer-mb MB     in-memory spill buffers (256)
+  --no-deflate             store tiles uncompressed
+  --quiet                  no progress bar
+  --help
+)";
+}
+
+Result<std::vector<double>> parseNumberList(const std::string& option, const std::string& text,
+                                            size_t count) {
+  std::vector<double> v;
+  std::stringstream s(text);
+  for (std::string item; std::getline(s, item, ',');) {
+    char* end = nullptr;
+    const double x = std::strtod(item.c_str(), &end);
+    if (item.empty() || *end != '\0' || !std::isfinite(x)) {
+      return Result<std::vector<double>>::failure(option + ": '" + item + "' is not a number");
+    }
+    v.push_back(x);
+  }
+  if (v.size() != count) {
+    return Result<std::vector<double>>::failure(option + " needs " + std::to_string(count) +
+                                                " comma-separated numbers, got '" + text + "'");
+  }
+  return v;
+}
+
+Result<Eigen::Isometry3d> parseTransform(const std::string& option, const std::string& text) {
+  const size_t n = std::count(text.begin(), text.end(), ',') + 1;
+  auto v = parseNumberList(option, text, n == 7 ? 7 : 6);
+  if (!v) return Result<Eigen::Isometry3d>::failure(v.error());
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.translation() = Eigen::Vector3d((*v)[0], (*v)[1], (*v)[2]);
+  if (n == 7) {
+    Eigen::Quaterniond q((*v)[6], (*v)[3], (*v)[4], (*v)[5]);
+    if (q.norm() < 1e-6) return Result<Eigen::Isometry3d>::failure(option + ": zero quaternion");
+    t.linear() = q.normalized().toRotationMatrix();
+  } else {
+    const double d = M_PI / 180.0;
+    t.linear() = (Eigen::AngleAxisd((*v)[5] * d, Eigen::Vector3d::UnitZ()) *
+                  Eigen::AngleAxisd((*v)[4] * d, Eigen::Vector3d::UnitY()) *
+                  Eigen::AngleAxisd((*v)[3] * d, Eigen::Vector3d::UnitX()))
+                     .toRotationMatrix();
+  }
+  return t;
+}
+
+namespace {
+
+Result<double> number(const std::string& opt, const std::string& v) {
+  char* end = nullptr;
+  const double x = std::strtod(v.c_str(), &end);
+  if (v.empty() || *end != '\0' || std::isnan(x)) {
+    return Result<double>::failure(opt + ": '" + v + "' is not a number");
+  }
+  return x;
+}
+
+Result<int> integer(const std::string& opt, const std::string& v) {
+  char* end = nullptr;
+  const long x = std::strtol(v.c_str(), &end, 10);
+  if (v.empty() || *end != '\0' || x < INT32_MIN || x > INT32_MAX) {
+    return Result<int>::failure(opt + ": '" + v + "' is not an integer");
+  }
+  return static_cast<int>(x);
+}
+
+}  // namespace
+
+Result<BuildMapConfig> parseBuildMapArgs(int argc, char** argv) {
+  using R = Result<BuildMapConfig>;
+  BuildMapConfig c;
+  MapBuilderOptions& b = c.builder;
+  std::string error;
+  auto setInput = [&](InputKind k, const std::string& opt) {
+    if (c.input != InputKind::kNone) error = opt + ": give exactly one input";
+    c.input = k;
+  };
+  // Options with a value: name -> handler(value).
+  using Handler = std::function<void(const std::string&, const std::string&)>;
+  auto num = [&](double& out) {
+    return Handler([&out, &error](const std::string& o, const std::string& v) {
+      auto x = number(o, v);
+      if (x)
+        out = *x;
+      else
+        error = x.error();
+    });
+  };
+  auto intg = [&](int& out) {
+    return Handler([&out, &error](const std::string& o, const std::string& v) {
+      auto x = integer(o, v);
+      if (x)
+        out = *x;
+      else
+        error = x.error();
+    });
+  };
+  auto str = [&](std::string& out) {
+    return Handler([&out](const std::string&, const std::string& v) { out = v; });
+  };
+  int k_max = b.em.max_components, seed = 1, spill_mb = 256;
+  double pcd_batch = 1e6;
+  std::map<std::string, Handler> valued = {
+      {"--output", str(b.output_directory)},
+      {"--pcd",
+       [&](const std::string& o, const std::string& v) {
+         setInput(InputKind::kPcd, o);
+         c.pcd_path = v;
+       }},
+      {"--pcd-batch", num(pcd_batch)},
+      {"--kitti",
+       [&](const std::string& o, const std::string& v) {
+         setInput(InputKind::kKitti, o);
+         c.kitti.scans_directory = v;
+       }},
+      {"--kitti-fields",
+       [&](const std::string& o, const std::string& v) {
+         if (v == "auto")
+           c.kitti.fields = KittiFields::kAuto;
+         else if (v == "xyz")
+           c.kitti.fields = KittiFields::kXyz;
+         else if (v == "xyzi")
+           c.kitti.fields = KittiFields::kXyzi;
+         else
+           error = o + ": '" + v + "' is not auto, xyz or xyzi";
+       }},
+      {"--poses", str(c.kitti.poses_file)},
+      {"--scans",
+       [&](const std::string&, const std::string& v) {
+         auto l = parseIndexList(v);
+         if (l)
+           c.kitti.scans = *l;
+         else
+           error = "--scans: " + l.error();
+       }},
+      {"--kitti-calib", str(c.kitti_calib)},
+      {"--bag",
+       [&](const std::string& o, const std::string& v) {
+         setInput(InputKind::kBag, o);
+         c.bag.path = v;
+       }},
+      {"--cloud-topic", str(c.bag.cloud_topic)},
+      {"--pose-topic", str(c.bag.pose_topic)},
+      {"--extrinsic",
+       [&](const std::string& o, const std::string& v) {
+         auto t = parseTransform(o, v);
+         if (t) {
+           c.bag.pose_T_cloud = *t;
+           c.bag.has_extrinsic = true;
+         } else
+           error = t.error();
+       }},
+      {"--max-pose-gap", num(c.bag.max_pose_gap_s)},
+      {"--every", intg(c.bag.every)},
+      {"--time-field", str(c.bag.time_field)},
+      {"--synthetic-street",
+       [&](const std::string& o, const std::string& v) {
+         setInput(InputKind::kSynthetic, o);
+         auto x = number(o, v);
+         if (x)
+           c.synthetic.length_m = *x;
+         else
+           error = x.error();
+       }},
+      {"--seed", intg(seed)},
+      {"--scan-spacing", num(c.synthetic.scan_spacing_m)},
+      {"--azimuth-step", num(c.synthetic.azimuth_step_deg)},
+      {"--resolution", num(b.geometry.resolution_m)},
+      {"--tile-size", intg(b.geometry.tile_size_cells)},
+      {"--origin",
+       [&](const std::string& o, const std::string& v) {
+         auto l = parseNumberList(o, v, 2);
+         if (l) {
+           b.geometry.origin_x_m = (*l)[0];
+           b.geometry.origin_y_m = (*l)[1];
+         } else
+           error = l.error();
+       }},
+      {"--k-max", intg(k_max)},
+      {"--criterion",
+       [&](const std::string& o, const std::string& v) {
+         if (v == "icl")
+           b.em.criterion = ModelSelection::kIcl;
+         else if (v == "bic")
+           b.em.criterion = ModelSelection::kBic;
+         else
+           error = o + ": '" + v + "' is not icl or bic";
+       }},
+      {"--sigma-floor", num(b.em.sigma_floor_m)},
+      {"--blur-sigma", num(b.blur_sigma_m)},
+      {"--blur-radius", intg(b.blur_radius_cells)},
+      {"--z-bin", num(b.z_bin_m)},
+      {"--min-own-points", intg(b.min_own_points)},
+      {"--min-range", num(b.min_range_m)},
+      {"--max-range", num(b.max_range_m)},
+      {"--min-z", num(b.min_z_m)},
+      {"--max-z", num(b.max_z_m)},
+      {"--voxel", num(b.voxel_m)},
+      {"--offset",
+       [&](const std::string& o, const std::string& v) {
+         auto l = parseNumberList(o, v, 3);
+         if (l)
+           c.offset_m = Eigen::Vector3d((*l)[0], (*l)[1], (*l)[2]);
+         else
+           error = l.error();
+       }},
+      {"--datum", str(b.georeference.datum)},
+      {"--threads", intg(b.threads)},
+      {"--temp-dir", str(b.temp_directory)},
+      {"--spill-buffer-mb", intg(spill_mb)},
+  };
+  for (int i = 1; i < argc && error.empty(); ++i) {
+    const std::string a = argv[i];
+    if (a == "--help" || a == "-h") {
+      c.help = true;
+      return c;
+    } else if (a == "--overwrite") {
+      b.overwrite = true;
+    } else if (a == "--no-deskew") {
+      c.bag.deskew = false;
+    } else if (a == "--no-deflate") {
+      b.codec.deflate = false;
+    } else if (a == "--quiet") {
+      c.quiet = true;
+    } else if (valued.count(a)) {
+      if (i + 1 >= argc) return R::failure(a + " needs a value");
+      valued[a](a, argv[++i]);
+    } else {
+      return R::failure("unknown option '" + a + "' (see --help)");
+    }
+  }
+  if (!error.empty()) return R::failure(error);
+  if (c.input == InputKind::kNone)
+    return R::failure("no input: give --pcd, --kitti, --bag or --synthetic-street");
+  b.em.max_components = k_max;
+  c.synthetic.seed = static_cast<uint32_t>(seed);
+  if (spill_mb < 1) return R::failure("--spill-buffer-mb must be >= 1");
+  b.spill_buffer_bytes = static_cast<size_t>(spill_mb) << 20;
+  if (!(pcd_batch >= 1000 && pcd_batch <= 1e8))
+    return R::failure("--pcd-batch must be in [1000, 1e8]");
+  c.pcd_batch_points = static_cast<size_t>(pcd_batch);
+  if (c.bag.every < 1) return R::failure("--every must be >= 1");
+  if (!(c.bag.max_pose_gap_s > 0.0)) return R::failure("--max-pose-gap must be > 0");
+  if (!(c.synthetic.length_m >= 10.0 && c.synthetic.length_m <= 100000.0)) {
+    return R::failure("--synthetic-street must be in [10, 100000] m");
+  }
+  if (!(c.synthetic.scan_spacing_m >= 0.05) || !(c.synthetic.azimuth_step_deg >= 0.05)) {
+    return R::failure("--scan-spacing must be >= 0.05 m and --azimuth-step >= 0.05 deg");
+  }
+  if (c.offset_m != Eigen::Vector3d::Zero() || !b.georeference.datum.empty()) {
+    b.georeference.present = true;
+    b.georeference.origin_easting_m = c.offset_m.x();
+    b.georeference.origin_northing_m = c.offset_m.y();
+    b.georeference.origin_up_m = c.offset_m.z();
+  }
+  const std::string invalid = b.validate();
+  if (!invalid.empty()) return R::failure("invalid options: " + invalid);
+  return c;
+}
+
+}  // namespace tools
+}  // namespace gmm_localization

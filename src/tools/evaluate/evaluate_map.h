@@ -1,0 +1,39 @@
+#pragma once
+// The rasterized map `evaluate` searches: the chunks the map server would serve along the
+// ground-truth route (ros/map_server_planner.h decides which), rasterized up front on worker
+// threads with the same rasterizer (core/rasterizer.h) and raster options.
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "evaluate/evaluate_metrics.h"
+#include "gmm_localization/core/common/result.h"
+#include "gmm_localization/core/raster/chunk_map.h"
+#include "gmm_localization/core/raster/raster_options.h"
+#include "gmm_localization/ros/map_server_options.h"
+#include "gmm_localization/ros/params.h"
+
+namespace gmm_localization {
+namespace eval {
+
+/// The map server's raster keys: node::loadRasterOptions (ros/map_server_options.h).
+using node::loadRasterOptions;
+
+struct RouteMapStats {
+  size_t tiles = 0;
+  size_t chunks = 0;
+  size_t bytes = 0;
+  double seconds = 0.0;  ///< wall time to load and rasterize
+};
+
+/// Rasterizes every chunk with data within radius_m of the route (ground-truth samples at least
+/// every spacing_m), on `threads` threads. Fails with the reason (unreadable map, bad tile).
+Result<std::shared_ptr<const ChunkMap>> rasterizeAlongRoute(const std::string& map_directory,
+                                                            const RasterOptions& options,
+                                                            const Trajectory& route,
+                                                            double radius_m, int threads,
+                                                            RouteMapStats* stats = nullptr);
+
+}  // namespace eval
+}  // namespace gmm_localization

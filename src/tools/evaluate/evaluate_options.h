@@ -1,0 +1,25 @@
+#pragma once
+// Command line of `evaluate` (evaluate --help prints the usage below).
+
+#include <string>
+
+#include "evaluate/evaluate_localize.h"
+#include "evaluate/evaluate_recorded.h"
+
+namespace gmm_localization {
+namespace eval {
+
+struct EvaluateCommand {
+  enum class Mode { kHelp, kBag, kRecorded } mode = Mode::kHelp;
+  std::string out;  ///< output directory
+  BagEvaluationConfig bag;
+  RecordedEvaluationConfig recorded;
+};
+
+/// Parses argv; throws std::invalid_argument with a message naming the bad option.
+EvaluateCommand parseEvaluateCommand(int argc, char** argv, const std::string& default_config_dir);
+
+const char* evaluateUsage();
+
+}  // namespace eval
+}  // namespace gmm_localization

@@ -1,0 +1,207 @@
+// kitti_check: real-data checks on a KITTI-style keyframe dump (../shared/data/real/
+// kitti07_keyframes): what the Gaussian mixtures look like on real ground, walls and vegetation
+// (`cells`), and leave-one-out registration from random offsets by our search and by PCL NDT
+// and GICP (`register`). Prints markdown tables; see docs/real_data.md.
+
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <filesystem>
+#include <string>
+
+#include "gmm_localization/core/map/map_store.h"
+#include "gmm_localization/core/mapping/kitti_source.h"
+#include "kitti_check/kitti_check_cells.h"
+#include "kitti_check/kitti_check_register.h"
+#include "kitti_check/kitti_check_report.h"
+
+using namespace gmm_localization;
+using namespace gmm_localization::kitti_check;
+
+namespace {
+
+constexpr double kExampleRadiusM = 30.0;  // example cells come from near the keyframes
+
+void usage() {
+  std::printf(
+      "kitti_check cells|register --data DIR --work DIR [options]\n"
+      "  --data DIR        keyframes: DIR/NNNNNN/points.bin (float32 x,y,z, sensor frame) and\n"
+      "                    DIR/graph.txt ('vN x y z qx qy qz qw' sensor poses)\n"
+      "  --work DIR        maps and CSV files are written here (created)\n"
+      "cells: map from every keyframe (WORK/map_all), each cell with data classed ground / wall /\n"
+      "  vegetation / other / below ground from its points (kitti_check_cells.h); prints the\n"
+      "  mixtures per class; writes\n"
+      "  WORK/cells.csv, WORK/examples.csv and WORK/cloud.bin (float32 x,y,z,class, map frame).\n"
+      "register: for each keyframe, a map from the others (WORK/loo_N) and registrations of it\n"
+      "  from seeded random offsets, ours and PCL NDT / GICP from the same offsets; writes\n"
+      "  WORK/trials.csv.\n"
+      "  --offsets N       offsets per keyframe and window (100)\n"
+      "  --seed N          offset seed (1)\n"
+      "  --keyframes LIST  held-out keyframes, e.g. 0,2-4 (all)\n"
+      "  --no-peers        ours only\n"
+      "  --no-ours         the peers only\n"
+      "  --ndt-resolution M, --ndt-step M, --peer-epsilon E, --peer-iterations N,\n"
+      "  --peer-voxel M    peer options (default: the registration benchmark's, bench_peers.h)\n"
+      "  --heading-step-deg D  search heading step (registration default 0.5)\n");
+}
+
+struct Args {
+  std::string mode, data, work;
+  LooOptions loo;
+};
+
+bool parse(int argc, char** argv, Args& a) {
+  if (argc < 2) return false;
+  a.mode = argv[1];
+  if (a.mode != "cells" && a.mode != "register") return false;
+  for (int i = 2; i < argc; ++i) {
+    const std::string k = argv[i];
+    if (k == "--no-peers" || k == "--no-ours") {
+      (k == "--no-peers" ? a.loo.peers : a.loo.ours) = false;
+      continue;
+    }
+    if (i + 1 >= argc) {
+      std::fprintf(stderr, "option %s needs a value\n", k.c_str());
+      return false;
+    }
+    const std::string v = argv[++i];
+    if (k == "--data") {
+      a.data = v;
+    } else if (k == "--work") {
+      a.work = v;
+    } else if (k == "--offsets") {
+      a.loo.offsets = std::atoi(v.c_str());
+    } else if (k == "--seed") {
+      a.loo.seed = static_cast<uint32_t>(std::atoi(v.c_str()));
+    } else if (k == "--heading-step-deg") {
+      a.loo.registration.heading_step_rad = std::atof(v.c_str()) * M_PI / 180.0;
+    } else if (k == "--ndt-resolution") {
+      a.loo.peer.ndt_resolution_m = std::atof(v.c_str());
+    } else if (k == "--ndt-step") {
+      a.loo.peer.ndt_step_size_m = std::atof(v.c_str());
+    } else if (k == "--peer-epsilon") {
+      a.loo.peer.epsilon = std::atof(v.c_str());
+    } else if (k == "--peer-iterations") {
+      a.loo.peer.max_iterations = std::atoi(v.c_str());
+    } else if (k == "--peer-voxel") {
+      a.loo.peer.source_voxel_m = std::atof(v.c_str());
+      a.loo.peer_target_voxel_m = std::atof(v.c_str());
+    } else if (k == "--keyframes") {
+      auto list = parseIndexList(v);
+      if (!list.ok()) {
+        std::fprintf(stderr, "--keyframes: %s\n", list.error().c_str());
+        return false;
+      }
+      a.loo.held_out = list.value();
+    } else {
+      std::fprintf(stderr, "unknown option %s\n", k.c_str());
+      return false;
+    }
+  }
+  if (a.data.empty() || a.work.empty()) {
+    std::fprintf(stderr, "--data and --work are required\n");
+    return false;
+  }
+  return true;
+}
+
+std::string today() {
+  char date[32];
+  const std::time_t t = std::time(nullptr);
+  std::strftime(date, sizeof(date), "%Y-%m-%d", std::localtime(&t));
+  return date;
+}
+
+int runCells(const Args& a) {
+  auto keyframes = loadKeyframes(a.data);
+  if (!keyframes.ok()) {
+    std::fprintf(stderr, "%s\n", keyframes.error().c_str());
+    return 1;
+  }
+  const std::string map_dir = a.work + "/map_all";
+  auto built = buildMap(a.data, {}, defaultMapOptions(map_dir));
+  if (!built.ok()) {
+    std::fprintf(stderr, "%s\n", built.error().c_str());
+    return 1;
+  }
+  auto store = MapStore::open(map_dir);
+  auto map = store.ok() ? store->loadAll() : Result<GmmMap>::failure(store.error());
+  if (!map.ok()) {
+    std::fprintf(stderr, "%s\n", map.error().c_str());
+    return 1;
+  }
+  const PointList cloud = worldCloud(keyframes.value(), {}, 0.0);
+  const PointLabels labels = classifyPoints(cloud, ClassifierOptions());
+  const std::vector<CellRecord> cells = classifyCells(map.value(), cloud, labels);
+  const MapBuildStats& s = built.value();
+  const uint64_t with_data = s.cells_by_components[1] + s.cells_by_components[2];
+  std::printf("# Gaussian mixtures on real ground, walls and vegetation, %s\n\n", today().c_str());
+  std::printf(
+      "map %s from %zu keyframes of %s (%llu points; 0.2 m cells, K <= 2, build_map defaults): "
+      "%llu cells with data, %.1f%% with 1 component, %.1f%% with 2\n\n",
+      map_dir.c_str(), keyframes->size(), a.data.c_str(),
+      static_cast<unsigned long long>(s.kept_points), static_cast<unsigned long long>(with_data),
+      100.0 * s.cells_by_components[1] / std::max<uint64_t>(1, with_data),
+      100.0 * s.cells_by_components[2] / std::max<uint64_t>(1, with_data));
+  std::vector<Eigen::Vector2d> centres;
+  for (const Keyframe& k : keyframes.value()) centres.push_back(k.truth.translation().head<2>());
+  const std::vector<size_t> examples = exampleCells(cells, centres, kExampleRadiusM);
+  printCellTables(cells, examples, stdout);
+  if (!writeCellsCsv(cells, examples, a.work + "/cells.csv", a.work + "/examples.csv")) {
+    std::fprintf(stderr, "cannot write the CSV files in %s\n", a.work.c_str());
+    return 1;
+  }
+  std::FILE* f = std::fopen((a.work + "/cloud.bin").c_str(), "wb");
+  if (f == nullptr) return 1;
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    const float rec[4] = {cloud[i].x(), cloud[i].y(), cloud[i].z(),
+                          static_cast<float>(static_cast<int>(labels.labels[i]))};
+    std::fwrite(rec, sizeof(rec), 1, f);
+  }
+  return std::fclose(f) == 0 ? 0 : 1;
+}
+
+int runRegister(Args a) {
+  a.loo.data_dir = a.data;
+  a.loo.work_dir = a.work;
+  auto report = runLeaveOneOut(a.loo);
+  if (!report.ok()) {
+    std::fprintf(stderr, "%s\n", report.error().c_str());
+    return 1;
+  }
+  std::printf("# Leave-one-out registration of %s, %s, one thread\n\n", a.data.c_str(),
+              today().c_str());
+  std::printf(
+      "%d seeded offsets (seed %u) per keyframe and window; priors keep the SLAM pose's z, roll "
+      "and pitch (gravity from an IMU); errors against the SLAM poses; success: < 0.5 m and < 1 "
+      "deg. Peers: PCL NDT and GICP (src/tools/bench/bench_peers.cpp) on the other keyframes' "
+      "points (voxel %.2f m), started at the same offset poses; scan voxel %.2f m, NDT "
+      "resolution %.2f m, NDT step %.2f m, epsilon %g, at most %d iterations, GICP "
+      "correspondences within %.1f m.\n\n",
+      a.loo.offsets, a.loo.seed, a.loo.peer_target_voxel_m, a.loo.peer.source_voxel_m,
+      a.loo.peer.ndt_resolution_m, a.loo.peer.ndt_step_size_m, a.loo.peer.epsilon,
+      a.loo.peer.max_iterations, a.loo.peer.gicp_max_correspondence_m);
+  printLooTables(report.value(), stdout);
+  if (!writeTrialsCsv(report.value(), a.work + "/trials.csv")) {
+    std::fprintf(stderr, "cannot write %s/trials.csv\n", a.work.c_str());
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Args a;
+  if (!parse(argc, argv, a)) {
+    usage();
+    return 2;
+  }
+  std::error_code ec;
+  std::filesystem::create_directories(a.work, ec);
+  if (ec) {
+    std::fprintf(stderr, "cannot create %s: %s\n", a.work.c_str(), ec.message().c_str());
+    return 1;
+  }
+  return a.mode == "cells" ? runCells(a) : runRegister(a);
+}

@@ -1,0 +1,276 @@
+// build_map's inputs that need PCL or ROS: a PCD map, a rosbag; plus its command line and the
+// synthetic street. No ROS master is needed (rosbag files are written and read directly).
+#include <geometry_msgs/TransformStamped.h>
+#include <nav_msgs/Odometry.h>
+#include <pcl/io/pcd_io.h>
+#include <pcl/point_types.h>
+#include <rosbag/bag.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <tf2_msgs/TFMessage.h>
+#include <unistd.h>
+
+#include <cstring>
+#include <filesystem>
+
+#include <gtest/gtest.h>
+
+#include "build_map/build_map_options.h"
+#include "build_map/build_map_readers.h"
+#include "build_map/build_map_synthetic.h"
+
+namespace gmm_localization {
+namespace tools {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct TempDir {
+  TempDir() {
+    char tmpl[] = "/tmp/gmm_readers_XXXXXX";
+    path = ::mkdtemp(tmpl);
+  }
+  ~TempDir() { fs::remove_all(path); }
+  std::string path;
+};
+
+TEST(PcdSource, ReadsInBatchesWithOffsetAndNoOrigin) {
+  TempDir dir;
+  pcl::PointCloud<pcl::PointXYZI> cloud;
+  for (int i = 0; i < 2500; ++i) {
+    pcl::PointXYZI p;
+    p.x = 1000.f + i * 0.01f;
+    p.y = 2000.f;
+    p.z = 0.5f;
+    p.intensity = 7.f;
+    cloud.push_back(p);
+  }
+  const std::string path = dir.path + "/map.pcd";
+  ASSERT_EQ(pcl::io::savePCDFileBinary(path, cloud), 0);
+  auto src = PcdSource::open(path, 1000, Eigen::Vector3d(1000.0, 2000.0, 0.0));
+  ASSERT_TRUE(src.ok()) << src.error();
+  EXPECT_EQ((*src)->sizeHint(), 3u);
+  PointBatch b;
+  std::vector<size_t> sizes;
+  while (true) {
+    auto more = (*src)->next(b);
+    ASSERT_TRUE(more.ok());
+    if (!*more) break;
+    EXPECT_FALSE(b.has_sensor_origin);
+    sizes.push_back(b.points_m.size());
+  }
+  EXPECT_EQ(sizes, (std::vector<size_t>{1000, 1000, 500}));
+  EXPECT_TRUE(b.points_m.empty());  // cleared at the end
+  auto missing = PcdSource::open(dir.path + "/none.pcd", 1000, Eigen::Vector3d::Zero());
+  ASSERT_FALSE(missing.ok());
+  EXPECT_NE(missing.error().find("none.pcd"), std::string::npos);
+}
+
+sensor_msgs::PointCloud2 cloudMsg(double t, const std::string& frame, float x) {
+  sensor_msgs::PointCloud2 c;
+  c.header.stamp.fromSec(t);
+  c.header.frame_id = frame;
+  c.height = 1;
+  c.width = 1;
+  c.point_step = 12;
+  c.row_step = 12;
+  const char* names[3] = {"x", "y", "z"};
+  for (int k = 0; k < 3; ++k) {
+    sensor_msgs::PointField f;
+    f.name = names[k];
+    f.offset = 4 * k;
+    f.datatype = sensor_msgs::PointField::FLOAT32;
+    f.count = 1;
+    c.fields.push_back(f);
+  }
+  const float v[3] = {x, 0.f, 0.f};
+  c.data.resize(12);
+  std::memcpy(c.data.data(), v, 12);
+  return c;
+}
+
+std::string writeBag(const std::string& dir, bool with_tf) {
+  const std::string path = dir + "/drive.bag";
+  rosbag::Bag bag(path, rosbag::bagmode::Write);
+  for (int i = 0; i <= 10; ++i) {  // 1 m/s along x, 10 Hz, for 1 s
+    nav_msgs::Odometry o;
+    o.header.stamp.fromSec(100.0 + 0.1 * i);
+    o.header.frame_id = "map";
+    o.child_frame_id = "base_link";
+    o.pose.pose.position.x = 0.1 * i;
+    o.pose.pose.orientation.w = 1.0;
+    bag.write("/odom", o.header.stamp, o);
+  }
+  if (with_tf) {
+    tf2_msgs::TFMessage tf;
+    geometry_msgs::TransformStamped t;
+    t.header.frame_id = "base_link";
+    t.child_frame_id = "velodyne";
+    t.transform.translation.z = 2.0;
+    t.transform.rotation.w = 1.0;
+    tf.transforms.push_back(t);
+    bag.write("/tf_static", ros::Time(100.0), tf);
+  }
+  bag.write("/points", ros::Time(100.25), cloudMsg(100.25, "velodyne", 1.f));
+  auto bad = cloudMsg(100.5, "velodyne", 1.f);
+  bad.point_step = 8;  // smaller than the z field's end
+  bag.write("/points", ros::Time(100.5), bad);
+  bag.write("/points", ros::Time(100.55), cloudMsg(100.55, "velodyne", 2.f));
+  bag.write("/points", ros::Time(101.5), cloudMsg(101.5, "velodyne", 1.f));  // after the poses
+  bag.close();
+  return path;
+}
+
+TEST(RosbagSource, InterpolatesPosesAppliesTfStaticAndSkipsWhatItCannotPlace) {
+  TempDir dir;
+  RosbagSourceOptions o;
+  o.path = writeBag(dir.path, true);
+  o.cloud_topic = "/points";
+  o.pose_topic = "/odom";
+  auto src = RosbagSource::open(o);
+  ASSERT_TRUE(src.ok()) << src.error();
+  EXPECT_EQ((*src)->sizeHint(), 4u);
+  PointBatch b;
+  auto more = (*src)->next(b);
+  ASSERT_TRUE(more.ok() && *more) << more.error();
+  ASSERT_EQ(b.points_m.size(), 1u);
+  EXPECT_TRUE(b.has_sensor_origin);
+  EXPECT_NEAR(b.sensor_origin_m.x(), 0.25, 1e-6);  // interpolated at the cloud's stamp
+  EXPECT_NEAR(b.sensor_origin_m.z(), 2.0, 1e-6);   // base_link -> velodyne from /tf_static
+  EXPECT_NEAR(b.points_m[0].x(), 1.25, 1e-5);
+  more = (*src)->next(b);
+  ASSERT_TRUE(more.ok() && *more);
+  EXPECT_NEAR(b.points_m[0].x(), 2.55, 1e-5);
+  more = (*src)->next(b);
+  ASSERT_TRUE(more.ok());
+  EXPECT_FALSE(*more);
+  const std::string skipped = (*src)->skipped();
+  EXPECT_NE(skipped.find("1 outside the poses' time span"), std::string::npos) << skipped;
+  EXPECT_NE(skipped.find("1 malformed (last: point_step too small)"), std::string::npos) << skipped;
+}
+
+TEST(RosbagSource, FailsClearlyWithoutExtrinsicAndUsesAGivenOne) {
+  TempDir dir;
+  RosbagSourceOptions o;
+  o.path = writeBag(dir.path, false);
+  o.cloud_topic = "/points";
+  o.pose_topic = "/odom";
+  auto src = RosbagSource::open(o);
+  ASSERT_TRUE(src.ok());
+  PointBatch b;
+  auto more = (*src)->next(b);
+  ASSERT_FALSE(more.ok());
+  EXPECT_NE(more.error().find("'velodyne'"), std::string::npos) << more.error();
+  EXPECT_NE(more.error().find("--extrinsic"), std::string::npos);
+  o.has_extrinsic = true;
+  o.pose_T_cloud.translation() = Eigen::Vector3d(0.0, 0.0, 1.0);
+  auto src2 = RosbagSource::open(o);
+  ASSERT_TRUE(src2.ok());
+  more = (*src2)->next(b);
+  ASSERT_TRUE(more.ok() && *more);
+  EXPECT_NEAR(b.sensor_origin_m.z(), 1.0, 1e-9);
+  o.pose_topic = "/points";  // wrong type on the pose topic
+  auto wrong = RosbagSource::open(o);
+  ASSERT_FALSE(wrong.ok());
+  EXPECT_NE(wrong.error().find("sensor_msgs/PointCloud2"), std::string::npos) << wrong.error();
+  o.path = dir.path + "/missing.bag";
+  EXPECT_FALSE(RosbagSource::open(o).ok());
+}
+
+TEST(RosbagSource, DeskewsWithPerPointTime) {
+  TempDir dir;
+  const std::string path = dir.path + "/timed.bag";
+  {
+    rosbag::Bag bag(path, rosbag::bagmode::Write);
+    for (int i = 0; i <= 10; ++i) {  // 1 m/s along x
+      nav_msgs::Odometry o;
+      o.header.stamp.fromSec(100.0 + 0.1 * i);
+      o.child_frame_id = "base_link";
+      o.pose.pose.position.x = 0.1 * i;
+      o.pose.pose.orientation.w = 1.0;
+      bag.write("/odom", o.header.stamp, o);
+    }
+    sensor_msgs::PointCloud2 c = cloudMsg(100.2, "base_link", 1.f);
+    sensor_msgs::PointField f;
+    f.name = "time";
+    f.offset = 12;
+    f.datatype = sensor_msgs::PointField::FLOAT32;
+    f.count = 1;
+    c.fields.push_back(f);
+    c.width = 2;
+    c.point_step = 16;
+    c.row_step = 32;
+    const float v[8] = {1.f, 0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.1f};  // the same point, 0.1 s later
+    c.data.resize(32);
+    std::memcpy(c.data.data(), v, 32);
+    bag.write("/points", ros::Time(100.2), c);
+  }
+  RosbagSourceOptions o;
+  o.path = path;
+  o.cloud_topic = "/points";
+  o.pose_topic = "/odom";
+  for (bool deskew : {true, false}) {
+    o.deskew = deskew;
+    auto src = RosbagSource::open(o);
+    ASSERT_TRUE(src.ok()) << src.error();
+    PointBatch b;
+    auto more = (*src)->next(b);
+    ASSERT_TRUE(more.ok() && *more) << more.error();
+    ASSERT_EQ(b.points_m.size(), 2u);
+    EXPECT_NEAR(b.points_m[0].x(), 1.2, 1e-5);
+    EXPECT_NEAR(b.points_m[1].x(), deskew ? 1.3 : 1.2, 1e-5);
+    EXPECT_NEAR(b.sensor_origin_m.x(), 0.2, 1e-9);
+  }
+}
+
+TEST(BuildMapArgs, ParsesAndRejects) {
+  const char* ok[] = {"build_map", "--output", "/tmp/m",   "--kitti", "/data",
+                      "--scans",   "0,2,4-5",  "--k-max",  "3",       "--blur-sigma",
+                      "0.15",      "--offset", "100,200,3"};
+  auto c = parseBuildMapArgs(13, const_cast<char**>(ok));
+  ASSERT_TRUE(c.ok()) << c.error();
+  EXPECT_EQ(c->input, InputKind::kKitti);
+  EXPECT_EQ(c->kitti.scans, (std::vector<int>{0, 2, 4, 5}));
+  EXPECT_EQ(c->builder.em.max_components, 3);
+  EXPECT_DOUBLE_EQ(c->builder.blur_sigma_m, 0.15);
+  EXPECT_TRUE(c->builder.georeference.present);
+  EXPECT_DOUBLE_EQ(c->builder.georeference.origin_northing_m, 200.0);
+  const char* two[] = {"build_map", "--output", "/tmp/m", "--pcd", "a.pcd", "--kitti", "d"};
+  EXPECT_NE(parseBuildMapArgs(7, const_cast<char**>(two)).error().find("exactly one input"),
+            std::string::npos);
+  const char* bad[] = {"build_map", "--output", "/tmp/m", "--pcd", "a.pcd", "--k-max", "5"};
+  EXPECT_NE(parseBuildMapArgs(7, const_cast<char**>(bad)).error().find("max_components"),
+            std::string::npos);
+  const char* unknown[] = {"build_map", "--frobnicate"};
+  EXPECT_NE(parseBuildMapArgs(2, const_cast<char**>(unknown)).error().find("unknown option"),
+            std::string::npos);
+  auto t = parseTransform("--extrinsic", "1,2,3,0,0,90");
+  ASSERT_TRUE(t.ok());
+  EXPECT_NEAR((t->linear() * Eigen::Vector3d::UnitX()).y(), 1.0, 1e-12);
+  EXPECT_FALSE(parseTransform("--extrinsic", "1,2,x").ok());
+}
+
+TEST(SyntheticStreet, DeterministicLidarLikeScans) {
+  SyntheticStreetOptions o;
+  o.length_m = 50.0;
+  o.azimuth_step_deg = 1.0;
+  SyntheticStreetSource a(o), b(o);
+  EXPECT_EQ(a.sizeHint(), 51u);
+  PointBatch pa, pb;
+  ASSERT_TRUE(*a.next(pa));
+  ASSERT_TRUE(*b.next(pb));
+  ASSERT_EQ(pa.points_m.size(), pb.points_m.size());
+  EXPECT_GT(pa.points_m.size(), 32u * 360 / 2);  // most rays return
+  for (size_t i = 0; i < pa.points_m.size(); ++i) ASSERT_EQ(pa.points_m[i], pb.points_m[i]);
+  EXPECT_TRUE(pa.has_sensor_origin);
+  size_t ground = 0;
+  for (const auto& p : pa.points_m) {
+    const double r = (p.cast<double>() - pa.sensor_origin_m).norm();
+    EXPECT_LE(r, 100.2);
+    ground += std::abs(p.z()) < 0.2;
+  }
+  EXPECT_GT(ground, pa.points_m.size() / 4);
+}
+
+}  // namespace
+}  // namespace tools
+}  // namespace gmm_localization

@@ -1,0 +1,59 @@
+// kitti_check's leave-one-out registration on the real KITTI 07 keyframes (skipped when
+// ../shared/data/real is absent), and its offset generator.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+
+#include "gmm_localization/core/common/types.h"
+#include "kitti_check/kitti_check_register.h"
+
+using namespace gmm_localization;
+using namespace gmm_localization::kitti_check;
+
+TEST(KittiCheckRegister, OffsetsStayInTheirDiscAndHeadingRange) {
+  std::mt19937 rng(5);
+  Eigen::Isometry3d truth = Eigen::Isometry3d::Identity();
+  truth.translation() = Eigen::Vector3d(3, -2, 0.5);
+  truth.linear() = Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  double largest = 0.0;
+  for (int i = 0; i < 500; ++i) {
+    const Pose6 p = offsetPrior(truth, 10.0, 15.0 * M_PI / 180.0, rng);
+    Trial t;
+    poseErrors(toIsometry(p), truth, t);
+    EXPECT_LE(t.error_m, 10.0 + 1e-9);
+    EXPECT_LE(t.error_deg, 15.0 + 1e-6);
+    EXPECT_NEAR(t.error_z_m, 0.0, 1e-9);
+    largest = std::max(largest, t.error_m);
+  }
+  EXPECT_GT(largest, 9.0);  // the disc is filled, not a smaller one
+}
+
+TEST(KittiCheckRegister, LeaveOneOutRecoversTheMiddleKeyframe) {
+  const std::string dir = std::string(GMM_SHARED_DATA_DIR) + "/real/kitti07_keyframes";
+  if (!std::filesystem::exists(dir + "/graph.txt")) {
+    GTEST_SKIP() << "real data absent: " << dir << " (see ../shared/data/real/README.md)";
+  }
+  const std::filesystem::path work =
+      std::filesystem::temp_directory_path() / ("kitti_check_test_" + std::to_string(getpid()));
+  LooOptions o;
+  o.data_dir = dir;
+  o.work_dir = work.string();
+  o.held_out = {2};
+  o.offsets = 3;
+  o.peers = false;
+  auto report = runLeaveOneOut(o);
+  std::filesystem::remove_all(work);
+  ASSERT_TRUE(report.ok()) << report.error();
+  ASSERT_EQ(report->folds.size(), 1u);
+  EXPECT_EQ(report->folds[0].map_keyframes, (std::vector<int>{0, 1, 3, 4}));
+  EXPECT_GT(report->folds[0].overlap, 0.5);
+  // From the SLAM pose and from 3 offsets in each of the two windows: all within 10 cm and
+  // 0.2 deg of the SLAM pose (measured: about 1-2 cm and 0.03 deg).
+  ASSERT_EQ(report->trials.size(), 7u);
+  for (const Trial& t : report->trials) {
+    ASSERT_TRUE(t.matched) << t.window << ": " << t.failure;
+    EXPECT_LT(t.error_m, 0.1) << t.window << " from " << t.offset_m << " m";
+    EXPECT_LT(t.error_deg, 0.2) << t.window << " from " << t.offset_deg << " deg";
+  }
+}

@@ -1,0 +1,83 @@
+#include "gmm_localization/core/map/gaussian_mixture.h"
+
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+
+namespace gmm_localization {
+namespace {
+
+double closedFormLog(const GaussianMixture1D& g, double z) {
+  double p = 0.0;
+  for (int j = 0; j < g.size(); ++j) {
+    const auto& c = g.component(j);
+    const double d = (z - c.mean_m) / c.sigma_m;
+    p += c.weight / (std::sqrt(2.0 * M_PI) * c.sigma_m) * std::exp(-0.5 * d * d);
+  }
+  return std::log(p);
+}
+
+TEST(GaussianMixture, LogLikelihoodMatchesClosedForm) {
+  GaussianMixture1D g;
+  g.add({0.7f, 0.1f, 0.05f});
+  g.add({0.3f, 2.5f, 0.8f});
+  for (double z = -1.0; z <= 4.0; z += 0.0137) {
+    EXPECT_NEAR(g.logLikelihood(z), closedFormLog(g, z), 1e-9) << "z=" << z;
+  }
+}
+
+TEST(GaussianMixture, FarFromEveryModeStaysFinite) {
+  GaussianMixture1D g;
+  g.add({1.0f, 0.0f, 0.02f});
+  const double ll = g.logLikelihood(1000.0);
+  EXPECT_TRUE(std::isfinite(ll));
+  EXPECT_LT(ll, -1e8);
+  // The closed form underflows to log(0) here; log-sum-exp does not.
+  EXPECT_FALSE(std::isfinite(closedFormLog(g, 1000.0)));
+}
+
+TEST(GaussianMixture, EmptyIsMinusInfinity) {
+  GaussianMixture1D g;
+  EXPECT_TRUE(std::isinf(g.logLikelihood(0.0)));
+  EXPECT_TRUE(std::isinf(g.maxLogLikelihood(0.0, 1.0)));
+}
+
+TEST(GaussianMixture, AddRefusesBeyondCapacity) {
+  GaussianMixture1D g;
+  for (int j = 0; j < kMaxMixtureComponents; ++j) EXPECT_TRUE(g.add({0.1f, 0.f, 1.f}));
+  EXPECT_FALSE(g.add({0.1f, 0.f, 1.f}));
+  EXPECT_EQ(g.size(), kMaxMixtureComponents);
+}
+
+TEST(GaussianMixture, MaxOverIntervalBoundsEverySample) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int trial = 0; trial < 300; ++trial) {
+    GaussianMixture1D g;
+    const int k = 1 + trial % kMaxMixtureComponents;
+    for (int j = 0; j < k; ++j) {
+      g.add({static_cast<float>(1.0 / k), static_cast<float>(4.0 * u(rng) - 2.0),
+             static_cast<float>(0.02 + 1.5 * u(rng) * u(rng))});
+    }
+    const double lo = 4.0 * u(rng) - 2.0;
+    const double hi = lo + 0.05 + 0.5 * u(rng);
+    const double bound = g.maxLogLikelihood(lo, hi);
+    double sampled = -INFINITY;
+    for (int i = 0; i <= 20000; ++i)
+      sampled = std::max(sampled, g.logLikelihood(lo + (hi - lo) * i / 20000.0));
+    EXPECT_GE(bound, sampled - 1e-9) << "trial " << trial;
+    EXPECT_LE(bound, sampled + 1e-4) << "trial " << trial;  // and it is tight
+  }
+}
+
+TEST(GaussianMixture, MahalanobisUsesNearestComponent) {
+  GaussianMixture1D g;
+  g.add({0.5f, 0.0f, 0.1f});
+  g.add({0.5f, 5.0f, 1.0f});
+  EXPECT_NEAR(g.mahalanobis(0.3), 3.0, 1e-6);
+  EXPECT_NEAR(g.mahalanobis(4.0), 1.0, 1e-6);
+}
+
+}  // namespace
+}  // namespace gmm_localization

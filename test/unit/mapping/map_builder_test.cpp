@@ -1,0 +1,403 @@
+#include "gmm_localization/core/mapping/map_builder.h"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <functional>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "gmm_localization/core/map/map_store.h"
+
+namespace gmm_localization {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct TempDir {
+  TempDir() {
+    char tmpl[] = "/tmp/gmm_map_builder_XXXXXX";
+    path = ::mkdtemp(tmpl);
+  }
+  ~TempDir() { fs::remove_all(path); }
+  std::vector<std::string> entries() const {
+    std::vector<std::string> names;
+    for (const auto& e : fs::directory_iterator(path)) names.push_back(e.path().filename());
+    std::sort(names.begin(), names.end());
+    return names;
+  }
+  std::string path;
+};
+
+/// An analytic world: surfaces sampled on a regular lattice with Gaussian height noise, fed to
+/// the builder in batches of `batch_size` points (no sensor origin).
+class World {
+ public:
+  void plane(double x0, double x1, double y0, double y1, double z, double step = 0.04) {
+    for (double x = x0 + step / 2; x < x1; x += step) {
+      for (double y = y0 + step / 2; y < y1; y += step) add(x, y, z);
+    }
+  }
+  /// A vertical wall at x = x_wall spanning y0..y1 and z0..z1.
+  void wallX(double x_wall, double y0, double y1, double z0, double z1, double step = 0.04) {
+    for (double y = y0 + step / 2; y < y1; y += step) {
+      for (double z = z0 + step / 2; z < z1; z += step) add(x_wall, y, z);
+    }
+  }
+  void add(double x, double y, double z) { points_.emplace_back(x, y, z + noise_(rng_)); }
+  Status feed(MapBuilder& b, size_t batch_size = 5000) const {
+    PointBatch batch;
+    for (size_t i = 0; i < points_.size(); i += batch_size) {
+      batch.points_m.assign(points_.begin() + i,
+                            points_.begin() + std::min(points_.size(), i + batch_size));
+      Status s = b.addBatch(batch);
+      if (!s) return s;
+    }
+    return Status::success();
+  }
+  size_t size() const { return points_.size(); }
+
+ private:
+  std::mt19937 rng_{42};
+  std::normal_distribution<float> noise_{0.f, 0.01f};
+  std::vector<Eigen::Vector3f> points_;
+};
+
+MapBuilderOptions options(const std::string& dir, int tile_size = 64) {
+  MapBuilderOptions o;
+  o.output_directory = dir;
+  o.geometry.tile_size_cells = tile_size;
+  return o;
+}
+
+Result<MapStore> build(const World& w, const MapBuilderOptions& o, MapBuildStats* stats = nullptr) {
+  auto b = MapBuilder::create(o);
+  if (!b) return Result<MapStore>::failure(b.error());
+  Status s = w.feed(**b);
+  if (!s) return Result<MapStore>::failure(s.error());
+  auto st = (*b)->finish();
+  if (!st) return Result<MapStore>::failure(st.error());
+  if (stats) *stats = *st;
+  return MapStore::open(o.output_directory);
+}
+
+/// The mixture of the cell containing (x, y), from a loaded map.
+GaussianMixture1D cellAt(const GmmMap& map, double x, double y) {
+  const GaussianMixture1D* g = map.cell(map.geometry().cellAt(x, y));
+  return g ? *g : GaussianMixture1D();
+}
+
+TEST(MapBuilder, FlatGroundIsOneTightComponent) {
+  TempDir dir;
+  World w;
+  w.plane(0.0, 10.0, 0.0, 10.0, 0.25);
+  auto store = build(w, options(dir.path));
+  ASSERT_TRUE(store.ok()) << store.error();
+  auto map = store->loadAll();
+  ASSERT_TRUE(map.ok()) << map.error();
+  for (double x = 0.1; x < 10.0; x += 0.2) {
+    for (double y = 0.1; y < 10.0; y += 0.2) {
+      const auto g = cellAt(*map, x, y);
+      ASSERT_EQ(g.size(), 1) << x << ", " << y;
+      EXPECT_NEAR(g.component(0).mean_m, 0.25, 0.005);
+      EXPECT_GE(g.component(0).sigma_m, 0.03f - 1e-5f);  // the floor
+      EXPECT_LE(g.component(0).sigma_m, 0.036f);         // floor + 1 cm noise + 1 cm bins
+    }
+  }
+  EXPECT_TRUE(cellAt(*map, -0.1, 5.0).empty());  // outside the ground: nothing invented
+  EXPECT_TRUE(cellAt(*map, 5.0, 10.1).empty());
+}
+
+TEST(MapBuilder, WallIsOneWideComponentSpanningItsHeight) {
+  TempDir dir;
+  World w;
+  w.wallX(5.1, 0.0, 10.0, 0.0, 6.0);
+  auto store = build(w, options(dir.path));
+  ASSERT_TRUE(store.ok()) << store.error();
+  auto map = store->loadAll();
+  ASSERT_TRUE(map.ok());
+  for (double y = 0.3; y < 9.8; y += 0.2) {
+    const auto g = cellAt(*map, 5.1, y);
+    ASSERT_EQ(g.size(), 1) << "y=" << y;
+    EXPECT_NEAR(g.component(0).mean_m, 3.0, 0.02);
+    EXPECT_NEAR(g.component(0).sigma_m, 6.0 / std::sqrt(12.0), 0.03);
+    EXPECT_TRUE(cellAt(*map, 4.9, y).empty());  // beside the wall: no own points, empty
+    EXPECT_TRUE(cellAt(*map, 5.3, y).empty());
+  }
+}
+
+TEST(MapBuilder, GroundBesideAWallGetsTightGroundAndWideWall) {
+  // The paper's facade cells: ground plus the blurred-in wall.
+  TempDir dir;
+  World w;
+  w.plane(0.0, 5.0, 0.0, 10.0, 0.0);
+  w.wallX(5.1, 0.0, 10.0, 0.0, 6.0);
+  auto store = build(w, options(dir.path));
+  ASSERT_TRUE(store.ok()) << store.error();
+  auto map = store->loadAll();
+  ASSERT_TRUE(map.ok());
+  const auto g = cellAt(*map, 4.9, 5.0);
+  ASSERT_EQ(g.size(), 2);
+  EXPECT_NEAR(g.component(0).mean_m, 0.0, 0.01);
+  EXPECT_LT(g.component(0).sigma_m, 0.04f);
+  EXPECT_GT(g.component(1).sigma_m, 1.0f);
+  const auto far = cellAt(*map, 2.0, 5.0);
+  ASSERT_EQ(far.size(), 1);
+  EXPECT_NEAR(far.component(0).mean_m, 0.0, 0.01);
+}
+
+TEST(MapBuilder, OverhangOverGroundIsTwoComponentsAtTheRightHeights) {
+  TempDir dir;
+  World w;
+  w.plane(0.0, 10.0, 0.0, 10.0, 0.0);
+  w.plane(2.0, 8.0, 2.0, 8.0, 3.0);  // an awning 3 m up
+  auto store = build(w, options(dir.path));
+  ASSERT_TRUE(store.ok()) << store.error();
+  auto map = store->loadAll();
+  ASSERT_TRUE(map.ok());
+  for (double x = 2.5; x < 7.5; x += 0.2) {
+    for (double y = 2.5; y < 7.5; y += 0.2) {
+      const auto g = cellAt(*map, x, y);
+      ASSERT_EQ(g.size(), 2) << x << ", " << y;
+      EXPECT_NEAR(g.component(0).mean_m, 0.0, 0.01);
+      EXPECT_NEAR(g.component(1).mean_m, 3.0, 0.01);
+      EXPECT_LT(g.component(0).sigma_m, 0.036f);
+      EXPECT_LT(g.component(1).sigma_m, 0.036f);
+      EXPECT_NEAR(g.component(0).weight, 0.5, 0.05);
+    }
+  }
+  EXPECT_EQ(cellAt(*map, 1.0, 1.0).size(), 1);
+}
+
+TEST(MapBuilder, EmptyAreaHasNoComponentsAndNoTiles) {
+  TempDir dir;
+  World w;
+  w.plane(0.0, 4.0, 0.0, 4.0, 0.0);
+  w.plane(30.0, 34.0, 0.0, 4.0, 0.0);  // 64-cell tiles are 12.8 m: tiles 0 and 2 only
+  auto store = build(w, options(dir.path));
+  ASSERT_TRUE(store.ok()) << store.error();
+  EXPECT_EQ(store->tileIds(), (std::vector<TileId>{{0, 0}, {2, 0}}));
+  auto map = store->loadAll();
+  ASSERT_TRUE(map.ok());
+  EXPECT_TRUE(cellAt(*map, 10.0, 2.0).empty());
+  EXPECT_TRUE(cellAt(*map, 5.0, 5.0).empty());
+  const MapSummary s = store->summary();
+  EXPECT_EQ(s.cells_by_components[1], 2u * 20 * 20);
+  EXPECT_EQ(s.cells_by_components[2] + s.cells_by_components[3], 0u);
+}
+
+/// Builds a mixed world with the given tile size, grid origin and buffer; returns the map.
+GmmMap buildMixed(const std::string& dir, int tile_size, double origin_m, size_t buffer_bytes,
+                  int threads) {
+  World w;
+  w.plane(-3.0, 9.0, -3.0, 9.0, 0.0);
+  w.plane(1.0, 5.0, -2.0, 4.0, 2.5);
+  w.wallX(3.05, -3.0, 9.0, 0.0, 4.0);
+  MapBuilderOptions o = options(dir, tile_size);
+  o.geometry.origin_x_m = o.geometry.origin_y_m = origin_m;
+  o.spill_buffer_bytes = buffer_bytes;
+  o.threads = threads;
+  auto store = build(w, o);
+  EXPECT_TRUE(store.ok()) << store.error();
+  auto map = store->loadAll();
+  EXPECT_TRUE(map.ok());
+  return map.ok() ? *map : GmmMap();
+}
+
+TEST(MapBuilder, StreamingOverTileBordersMatchesSingleTileReference) {
+  TempDir a, b;
+  // 16-cell tiles (3.2 m) from origin 0: the world (-3..9 m) straddles 4 x 4 tiles, with
+  // negative indices, and the blur halo crosses every border. 256-cell tiles from origin
+  // -12.8 m (a whole number of cells away, so cells coincide): one tile holds it all.
+  const GmmMap tiled = buildMixed(a.path, 16, 0.0, size_t{1} << 20, 2);
+  const GmmMap single = buildMixed(b.path, 256, -12.8, size_t{256} << 20, 1);
+  EXPECT_EQ(tiled.tiles().size(), 16u);
+  EXPECT_EQ(single.tiles().size(), 1u);
+  int compared = 0, two = 0;
+  for (double x = -3.9; x < 10.0; x += 0.2) {
+    for (double y = -3.9; y < 10.0; y += 0.2) {
+      const GaussianMixture1D* p = tiled.cell(tiled.geometry().cellAt(x, y));
+      const GaussianMixture1D* q = single.cell(single.geometry().cellAt(x, y));
+      const int kp = p ? p->size() : 0, kq = q ? q->size() : 0;
+      ASSERT_EQ(kp, kq) << "cell at " << x << ", " << y;
+      for (int c = 0; c < kp; ++c) {
+        // Same fit; only the per-tile mean quantum (<= 0.5 mm) differs.
+        EXPECT_NEAR(p->component(c).mean_m, q->component(c).mean_m, 1.1e-3);
+        EXPECT_NEAR(p->component(c).sigma_m, q->component(c).sigma_m, 1e-4);
+        EXPECT_NEAR(p->component(c).weight, q->component(c).weight, 1e-4);
+      }
+      compared += kp > 0;
+      two += kp == 2;
+    }
+  }
+  EXPECT_EQ(compared, 60 * 60);
+  EXPECT_GT(two, 100);
+}
+
+TEST(MapBuilder, OutputIsDeterministicAcrossThreadsAndBuffers) {
+  TempDir a, b;
+  buildMixed(a.path, 32, 0.0, size_t{1} << 20, 1);
+  buildMixed(b.path, 32, 0.0, size_t{64} << 20, 2);
+  auto ma = readManifest(a.path), mb = readManifest(b.path);
+  ASSERT_TRUE(ma.ok() && mb.ok());
+  ASSERT_EQ(ma->tiles.size(), mb->tiles.size());
+  for (size_t i = 0; i < ma->tiles.size(); ++i) {
+    EXPECT_EQ(ma->tiles[i].id, mb->tiles[i].id);
+    EXPECT_EQ(ma->tiles[i].crc32, mb->tiles[i].crc32);  // byte-identical tile files
+  }
+}
+
+TEST(MapBuilder, FiltersAreAppliedAndCounted) {
+  TempDir dir;
+  MapBuilderOptions o = options(dir.path);
+  o.min_range_m = 2.0;
+  o.max_range_m = 10.0;
+  o.min_z_m = -1.0;
+  o.max_z_m = 5.0;
+  auto b = MapBuilder::create(o);
+  ASSERT_TRUE(b.ok()) << b.error();
+  PointBatch scan;
+  scan.has_sensor_origin = true;
+  scan.sensor_origin_m = {0.0, 0.0, 2.0};
+  scan.points_m = {{3.f, 0.f, 0.f},  {0.5f, 0.f, 2.f},   // kept, too close
+                   {20.f, 0.f, 0.f}, {3.f, 1.f, 6.f},    // too far, too high
+                   {NAN, 0.f, 0.f},  {3.f, 2.f, -0.5f},  // invalid, kept
+                   {1e8f, 0.f, 0.f}};                    // beyond the map frame
+  ASSERT_TRUE((*b)->addBatch(scan).ok());
+  PointBatch cloud;  // no sensor origin: no range filter
+  cloud.points_m = {{50.f, 0.f, 0.f}, {0.1f, 0.f, 2.f}};
+  ASSERT_TRUE((*b)->addBatch(cloud).ok());
+  const MapBuildStats& s = (*b)->stats();
+  EXPECT_EQ(s.batches, 2u);
+  EXPECT_EQ(s.batches_without_origin, 1u);
+  EXPECT_EQ(s.input_points, 9u);
+  EXPECT_EQ(s.kept_points, 4u);
+  EXPECT_EQ(s.dropped_range, 2u);
+  EXPECT_EQ(s.dropped_height, 1u);
+  EXPECT_EQ(s.dropped_invalid, 2u);
+  auto st = (*b)->finish();
+  ASSERT_TRUE(st.ok()) << st.error();
+  EXPECT_EQ(st->cells_by_components[1], 4u);
+}
+
+TEST(MapBuilder, VoxelFilterKeepsOnePointPerVoxelPerBatch) {
+  TempDir dir;
+  MapBuilderOptions o = options(dir.path);
+  o.voxel_m = 0.1;
+  auto b = MapBuilder::create(o);
+  ASSERT_TRUE(b.ok());
+  PointBatch batch;
+  for (int i = 0; i < 10; ++i) batch.points_m.emplace_back(0.01f * i, 0.05f, 0.05f);  // one voxel
+  batch.points_m.emplace_back(0.35f, 0.05f, 0.05f);
+  ASSERT_TRUE((*b)->addBatch(batch).ok());
+  ASSERT_TRUE((*b)->addBatch(batch).ok());  // the filter is per batch
+  EXPECT_EQ((*b)->stats().kept_points, 4u);
+  EXPECT_EQ((*b)->stats().dropped_voxel, 18u);
+}
+
+TEST(MapBuilder, TemporaryFilesAreRemovedOnSuccessFailureAndCancel) {
+  TempDir dir;
+  World w;
+  w.plane(0.0, 20.0, 0.0, 20.0, 0.0);
+  {  // Success: only the manifest and tile files remain.
+    auto store = build(w, options(dir.path + "/ok", 32));
+    ASSERT_TRUE(store.ok());
+    for (const auto& e : fs::directory_iterator(dir.path + "/ok")) {
+      const std::string name = e.path().filename();
+      EXPECT_TRUE(name == "manifest.gmm" || name.rfind("tile_", 0) == 0) << name;
+    }
+  }
+  {  // Abandoned before finish(): the destructor removes the spill directory.
+    auto b = MapBuilder::create(options(dir.path + "/abandoned", 32));
+    ASSERT_TRUE(b.ok());
+    ASSERT_TRUE(w.feed(**b).ok());
+    EXPECT_FALSE(fs::is_empty(dir.path + "/abandoned"));
+    b->reset();
+    EXPECT_TRUE(fs::is_empty(dir.path + "/abandoned"));
+  }
+  {  // Nothing kept: a failure with the counts, and nothing left behind.
+    MapBuilderOptions o = options(dir.path + "/none", 32);
+    o.min_z_m = 100.0;
+    auto b = MapBuilder::create(o);
+    ASSERT_TRUE(b.ok());
+    ASSERT_TRUE(w.feed(**b).ok());
+    auto st = (*b)->finish();
+    ASSERT_FALSE(st.ok());
+    EXPECT_NE(st.error().find("no points kept"), std::string::npos) << st.error();
+    EXPECT_TRUE(fs::is_empty(dir.path + "/none"));
+  }
+  {  // Cancelled from the progress callback after two tiles: no manifest, no tiles.
+    auto b = MapBuilder::create(options(dir.path + "/cancel", 16));
+    ASSERT_TRUE(b.ok());
+    ASSERT_TRUE(w.feed(**b).ok());
+    uint64_t last_done = 0, total = 0;
+    auto st = (*b)->finish([&](const BuildProgress& p) {
+      EXPECT_GT(p.tiles_done, last_done);
+      last_done = p.tiles_done;
+      total = p.tiles_total;
+      return p.tiles_done < 2;
+    });
+    ASSERT_FALSE(st.ok());
+    EXPECT_NE(st.error().find("cancelled"), std::string::npos);
+    EXPECT_EQ(last_done, 2u);
+    EXPECT_GT(total, 2u);
+    EXPECT_TRUE(fs::is_empty(dir.path + "/cancel"));
+  }
+}
+
+TEST(MapBuilder, RemovesSpillDirectoriesOfDeadProcesses) {
+  TempDir dir;
+  // pid 2^22 + 1 is above Linux's pid_max limit: no such process can exist.
+  const std::string stale = dir.path + "/.gmm_build_spill.4194305.0";
+  const std::string live = dir.path + "/.gmm_build_spill." + std::to_string(getpid()) + ".999";
+  fs::create_directories(stale);
+  fs::create_directories(live);
+  auto b = MapBuilder::create(options(dir.path));
+  ASSERT_TRUE(b.ok());
+  EXPECT_FALSE(fs::exists(stale));
+  EXPECT_TRUE(fs::exists(live));  // a running process's directory is left alone
+}
+
+TEST(MapBuilder, RefusesToOverwriteUnlessAsked) {
+  TempDir dir;
+  World big, small;
+  big.plane(0.0, 20.0, 0.0, 20.0, 0.0);
+  small.plane(0.0, 2.0, 0.0, 2.0, 1.0);
+  ASSERT_TRUE(build(big, options(dir.path, 32)).ok());
+  const size_t before = dir.entries().size();
+  EXPECT_GT(before, 2u);
+  auto again = MapBuilder::create(options(dir.path, 32));
+  ASSERT_FALSE(again.ok());
+  EXPECT_NE(again.error().find("already holds a map"), std::string::npos);
+  MapBuilderOptions o = options(dir.path, 32);
+  o.overwrite = true;
+  auto store = build(small, o);
+  ASSERT_TRUE(store.ok()) << store.error();
+  EXPECT_EQ(dir.entries().size(), 2u);  // the old map's tiles are gone
+  EXPECT_TRUE(store->verify().empty());
+}
+
+TEST(MapBuilder, OptionsValidateNamesTheField) {
+  MapBuilderOptions o;
+  EXPECT_NE(o.validate().find("output_directory"), std::string::npos);
+  o.output_directory = "/tmp/x";
+  EXPECT_TRUE(o.validate().empty());
+  o.blur_radius_cells = 20;
+  EXPECT_NE(o.validate().find("blur_radius_cells"), std::string::npos);
+  o = MapBuilderOptions();
+  o.output_directory = "/tmp/x";
+  o.max_range_m = 0.5;
+  EXPECT_NE(o.validate().find("max_range_m"), std::string::npos);
+  o = MapBuilderOptions();
+  o.output_directory = "/tmp/x";
+  o.em.max_components = 0;
+  EXPECT_NE(o.validate().find("em: max_components"), std::string::npos);
+  auto b = MapBuilder::create(o);
+  ASSERT_FALSE(b.ok());
+  EXPECT_NE(b.error().find("invalid map builder options"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace gmm_localization

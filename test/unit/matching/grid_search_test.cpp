@@ -1,0 +1,181 @@
+// Branch-and-bound equals exhaustive (pose and score) on seeded random cases, including ties
+// and windows that straddle chunk and tile borders (DESIGN.md 4.7).
+
+#include "gmm_localization/core/matching/grid_search.h"
+
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "gmm_localization/core/raster/rasterizer.h"
+#include "support/random_map.h"
+
+namespace gmm_localization {
+namespace {
+
+MapGeometry geometry() {
+  MapGeometry g;
+  g.resolution_m = 0.2;
+  g.tile_size_cells = 40;
+  g.origin_x_m = -4.1;
+  g.origin_y_m = 2.3;
+  return g;
+}
+
+ChunkMap rasterize(const GmmMap& map, const RasterOptions& o) {
+  ChunkMap chunks(map.geometry(), o);
+  for (int cy = -4; cy <= 3; ++cy) {
+    for (int cx = -4; cx <= 3; ++cx) {
+      auto r = rasterizeChunk(map, {cx, cy}, o);
+      EXPECT_TRUE(r.ok()) << r.error();
+      chunks.insert(r.value());
+    }
+  }
+  return chunks;
+}
+
+PointList randomPoints(std::mt19937& rng, int n, double radius) {
+  std::uniform_real_distribution<double> u(-radius, radius);
+  std::uniform_real_distribution<double> z(-1.8, 4.0);
+  PointList pts;
+  for (int i = 0; i < n; ++i) {
+    pts.emplace_back(static_cast<float>(u(rng)), static_cast<float>(u(rng)),
+                     static_cast<float>(z(rng)));
+  }
+  return pts;
+}
+
+/// A window around a uniform random prior in [-xy, xy]^2 (z in [0, z_max), any heading), with
+/// half extents in [half_min, half_min + half_span) [m] and half heading below heading_max.
+SearchWindow randomWindow(std::mt19937& rng, double xy, double z_max, double half_min,
+                          double half_span, double heading_max) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Pose6 prior;
+  prior.x = -xy + 2.0 * xy * u(rng);
+  prior.y = -xy + 2.0 * xy * u(rng);
+  prior.z = z_max * u(rng);
+  prior.yaw = 6.28 * u(rng);
+  const double half_x = half_min + half_span * u(rng);
+  const double half_y = half_min + half_span * u(rng);
+  const double half_heading = heading_max * u(rng);
+  return SearchWindow::fromExtent(prior, half_x, half_y, half_heading, 0.02, 0.2);
+}
+
+void expectSame(const SearchOutcome& a, const SearchOutcome& b, int c) {
+  EXPECT_EQ(a.score, b.score) << "case " << c;
+  EXPECT_EQ(a.heading_index, b.heading_index) << "case " << c;
+  EXPECT_EQ(a.tx, b.tx) << "case " << c;
+  EXPECT_EQ(a.ty, b.ty) << "case " << c;
+}
+
+TEST(GridSearch, BranchAndBoundEqualsExhaustiveOnRandomCases) {
+  const GmmMap map = testing::randomMap(5, geometry(), -2, -2, 4, 4, 0.35);
+  for (int coarsen : {0, 1, 2}) {
+    RasterOptions o;
+    o.chunk_shift = 5;
+    o.num_layers = 4;
+    o.z_coarsening_period = coarsen;
+    const ChunkMap chunks = rasterize(map, o);
+    std::mt19937 rng(100 + coarsen);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (int c = 0; c < 60; ++c) {
+      // Windows straddle tile (8 m) and chunk (6.4 m) borders.
+      const SearchWindow w = randomWindow(rng, 12.0, 1.0, 0.4, 2.6, 0.1);
+      const PointList pts = randomPoints(rng, 5 + static_cast<int>(300 * u(rng)), 4.0);
+      auto problem = SearchProblem::create(chunks, pts, w);
+      ASSERT_TRUE(problem.ok()) << problem.error();
+      const SearchOutcome ex = exhaustiveSearch(problem.value());
+      BranchAndBoundOptions bo;
+      bo.prior_as_incumbent = (c % 2) == 0;
+      const SearchOutcome bb = branchAndBoundSearch(problem.value(), bo);
+      expectSame(ex, bb, c);
+      // The prior, when used as incumbent, is the one extra base-layer evaluation.
+      EXPECT_LE(bb.stats.evaluations_per_layer[0], w.poses() + (bo.prior_as_incumbent ? 1 : 0));
+    }
+  }
+}
+
+TEST(GridSearch, BranchAndBoundEqualsExhaustiveWhenTheTopLayerIsCapped) {
+  // Few layers: the coarsest layer tiles the window with many nodes (odd counts included),
+  // scored four at a time.
+  const GmmMap map = testing::randomMap(6, geometry(), -2, -2, 4, 4, 0.35);
+  RasterOptions o;
+  o.chunk_shift = 5;
+  o.num_layers = 2;
+  const ChunkMap chunks = rasterize(map, o);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int c = 0; c < 30; ++c) {
+    const SearchWindow w = randomWindow(rng, 10.0, 0.0, 1.0, 2.0, 0.05);
+    const PointList pts = randomPoints(rng, 20 + static_cast<int>(200 * u(rng)), 4.0);
+    auto problem = SearchProblem::create(chunks, pts, w);
+    ASSERT_TRUE(problem.ok()) << problem.error();
+    ASSERT_EQ(problem->topLayer(), 2);
+    const SearchOutcome ex = exhaustiveSearch(problem.value());
+    std::vector<TraversalNode> traversal;
+    const SearchOutcome bb = branchAndBoundSearch(problem.value(), {c % 2 == 0}, &traversal);
+    expectSame(ex, bb, c);
+    // Every bound the search used, the coarsest layer's four-at-a-time ones included, is the
+    // node's own score.
+    for (const TraversalNode& n : traversal) {
+      ASSERT_EQ(n.bound, problem->score(n.heading_index, n.layer, n.tx, n.ty))
+          << "case " << c << ", layer " << n.layer << " node (" << n.tx << ", " << n.ty << ")";
+    }
+    const int64_t top_nodes = ((w.sizeX() + 3) / 4) * ((w.sizeY() + 3) / 4) * w.sizeH();
+    EXPECT_GT(top_nodes, 4 * w.sizeH()) << "case " << c << ": more than a 2 x 2 top grid";
+    EXPECT_EQ(bb.stats.evaluations_per_layer[2], top_nodes) << "case " << c;
+  }
+}
+
+TEST(GridSearch, TiesResolveIdenticallyOnAUniformMap) {
+  // Every cell holds the same mixture: all translations of a heading tie exactly.
+  MapGeometry g = geometry();
+  GmmMap map(g);
+  for (int ty = -2; ty < 2; ++ty) {
+    for (int tx = -2; tx < 2; ++tx) {
+      auto tile = std::make_shared<GmmTile>(TileId{tx, ty}, g.tile_size_cells);
+      for (auto& cell : tile->cells()) cell.add({1.0f, 0.0f, 0.05f});
+      map.insert(tile);
+    }
+  }
+  RasterOptions o;
+  o.chunk_shift = 5;
+  o.num_layers = 4;
+  const ChunkMap chunks = rasterize(map, o);
+  std::mt19937 rng(9);
+  for (int c = 0; c < 40; ++c) {
+    Pose6 prior;
+    prior.x = -3.0 + 0.17 * c;
+    prior.y = 1.0 - 0.05 * c;
+    PointList pts;
+    for (int i = 0; i < 30; ++i) pts.emplace_back(0.3f * i - 4.0f, 0.1f * (i % 7), 0.0f);
+    const SearchWindow w = SearchWindow::fromExtent(prior, 1.6, 1.2, 0.06, 0.02, 0.2);
+    auto problem = SearchProblem::create(chunks, pts, w);
+    ASSERT_TRUE(problem.ok());
+    const SearchOutcome ex = exhaustiveSearch(problem.value());
+    const SearchOutcome bb = branchAndBoundSearch(problem.value(), {false});
+    expectSame(ex, bb, c);
+    EXPECT_EQ(ex.tx + ex.ty + ex.heading_index, 0) << "ties go to the smallest key";
+  }
+}
+
+TEST(GridSearch, OffMapScanIsRejectedWithReason) {
+  const GmmMap map = testing::randomMap(5, geometry(), 0, 0, 1, 1);
+  RasterOptions o;
+  o.chunk_shift = 5;
+  o.num_layers = 3;
+  ChunkMap chunks(map.geometry(), o);
+  chunks.insert(rasterizeChunk(map, {0, 0}, o).value());
+  Pose6 far;
+  far.x = 5000.0;
+  std::mt19937 rng(1);
+  auto problem = SearchProblem::create(chunks, randomPoints(rng, 50, 3.0),
+                                       SearchWindow::fromExtent(far, 2.0, 2.0, 0.0, 0.01, 0.2));
+  ASSERT_FALSE(problem.ok());
+  EXPECT_NE(problem.error().find("off the map"), std::string::npos) << problem.error();
+  auto empty = SearchProblem::create(chunks, {}, SearchWindow::fromExtent({}, 1, 1, 0, 0.01, 0.2));
+  ASSERT_FALSE(empty.ok());
+}
+
+}  // namespace
+}  // namespace gmm_localization
