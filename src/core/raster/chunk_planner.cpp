@@ -5,6 +5,8 @@
 #include <limits>
 #include <tuple>
 
+#include "gmm_localization/core/raster/chunk_reach.h"
+
 namespace gmm_localization {
 namespace {
 
@@ -55,17 +57,9 @@ double ChunkPlanner::distanceToTile(TileId id, const std::vector<PlanCentre>& ce
 }
 
 std::vector<TileId> ChunkPlanner::tilesFor(ChunkId id) const {
-  // Cells read: [origin, origin + C + R) per axis, R = 2^num_layers - 1 (core/rasterizer.h).
-  const int64_t cells = raster_.chunkCells();
-  const int64_t reach = (int64_t{1} << raster_.num_layers) - 1;
-  const int64_t x0 = static_cast<int64_t>(id.x) * cells, y0 = static_cast<int64_t>(id.y) * cells;
-  const TileId lo = geometry_.tileOf({x0, y0});
-  const TileId hi = geometry_.tileOf({x0 + cells + reach - 1, y0 + cells + reach - 1});
   std::vector<TileId> out;
-  for (int32_t tx = lo.x; tx <= hi.x; ++tx) {
-    for (int32_t ty = lo.y; ty <= hi.y; ++ty) {
-      if (tiles_.count({tx, ty}) > 0) out.push_back({tx, ty});
-    }
+  for (const TileId& t : chunkReadTiles(geometry_, id, raster_)) {
+    if (tiles_.count(t) > 0) out.push_back(t);
   }
   return out;
 }

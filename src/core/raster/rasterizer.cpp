@@ -5,6 +5,8 @@
 #include <cmath>
 #include <limits>
 
+#include "gmm_localization/core/raster/chunk_reach.h"
+
 namespace gmm_localization {
 namespace {
 
@@ -14,7 +16,7 @@ constexpr double kMaxAbsHeightM = 1.0e4;
 
 int32_t floorBin(double z, double step) { return static_cast<int32_t>(std::floor(z / step)); }
 
-/// z range and the mixtures of the (C + R)^2 cells a chunk's layers read.
+/// z range and the mixtures of the (C + R)^2 cells a chunk's layers read (chunkReadCells).
 struct ChunkInput {
   int extent = 0;                                 // C + R cells per axis
   std::vector<const GaussianMixture1D*> mixture;  // extent^2, nullptr where no data
@@ -22,14 +24,13 @@ struct ChunkInput {
   int32_t zb_hi = -1;  // inclusive; zb_hi < zb_lo: nothing above the floor
 };
 
-ChunkInput gatherInput(const GmmMap& map, const MapChunk& chunk, int reach, double z_step,
-                       double ll_floor) {
+ChunkInput gatherInput(const GmmMap& map, const CellRect& read, double z_step, double ll_floor) {
   ChunkInput in;
-  in.extent = chunk.cells() + reach;
+  in.extent = static_cast<int>(read.widthCells());  // the rule's rectangle is square
   in.mixture.assign(static_cast<size_t>(in.extent) * in.extent, nullptr);
   double z_min = std::numeric_limits<double>::infinity();
   double z_max = -std::numeric_limits<double>::infinity();
-  const CellIndex o = chunk.origin();
+  const CellIndex o = read.lo;
   for (int ey = 0; ey < in.extent; ++ey) {
     for (int ex = 0; ex < in.extent; ++ex) {
       const GaussianMixture1D* g = map.cell({o.x + ex, o.y + ey});
@@ -180,8 +181,8 @@ Result<MapChunkConstPtr> rasterizeChunk(const GmmMap& map, ChunkId id,
   if (!invalid.empty()) return Result<MapChunkConstPtr>::failure("raster options: " + invalid);
   auto chunk = std::make_shared<MapChunk>(id, options.chunk_shift);
   const int cells = chunk->cells();
-  const int reach = (1 << options.num_layers) - 1;
-  const ChunkInput in = gatherInput(map, *chunk, reach, options.z_step_m, options.ll_floor);
+  const ChunkInput in =
+      gatherInput(map, chunkReadCells(id, options), options.z_step_m, options.ll_floor);
   const int extent = in.extent;
   const size_t plane = static_cast<size_t>(extent) * extent;
   const size_t out_plane = static_cast<size_t>(cells) * cells;

@@ -1,23 +1,17 @@
 #include "bench_data.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <map>
-#include <set>
 
 #include "gmm_localization/core/common/types.h"
 #include "gmm_localization/core/mapping/kitti_source.h"
-#include "gmm_localization/core/raster/rasterizer.h"
+#include "gmm_localization/core/raster/raster_region.h"
 
 namespace gmm_localization {
 namespace bench {
 
 namespace {
-double now() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-
 std::string scanPath(const std::string& dir, int index) {
   char name[32];
   std::snprintf(name, sizeof(name), "/velodyne/%06d.bin", index);
@@ -54,53 +48,14 @@ Result<std::vector<BenchScan>> loadScans(const std::string& dir, int count) {
 Result<ChunkMap> rasterizeAround(const MapStore& store, const std::vector<Eigen::Vector3d>& centres,
                                  double radius_m, const RasterOptions& options,
                                  RasterStats& stats) {
-  const MapGeometry& g = store.geometry();
-  ChunkMap chunks(g, options);
-  std::set<ChunkId> wanted;
-  const double chunk_m = g.resolution_m * options.chunkCells();
-  for (const Eigen::Vector3d& c : centres) {
-    const CellIndex lo = g.cellAt(c.x() - radius_m, c.y() - radius_m);
-    const CellIndex hi = g.cellAt(c.x() + radius_m, c.y() + radius_m);
-    for (int64_t cy = lo.y >> options.chunk_shift; cy <= (hi.y >> options.chunk_shift); ++cy) {
-      for (int64_t cx = lo.x >> options.chunk_shift; cx <= (hi.x >> options.chunk_shift); ++cx) {
-        const Eigen::Vector2d centre =
-            g.cellCenter({cx << options.chunk_shift, cy << options.chunk_shift}) +
-            Eigen::Vector2d::Constant(0.5 * chunk_m);
-        if ((centre - c.head<2>()).norm() <= radius_m + chunk_m) {
-          wanted.insert({static_cast<int32_t>(cx), static_cast<int32_t>(cy)});
-        }
-      }
-    }
-  }
-  // Tiles covering the wanted chunks and their +x/+y reach.
-  GmmMap map(g);
-  std::set<TileId> tiles;
-  const int reach = (1 << options.num_layers);
-  for (const ChunkId& id : wanted) {
-    const CellIndex o{static_cast<int64_t>(id.x) << options.chunk_shift,
-                      static_cast<int64_t>(id.y) << options.chunk_shift};
-    const TileId t0 = g.tileOf(o);
-    const TileId t1 =
-        g.tileOf({o.x + options.chunkCells() + reach, o.y + options.chunkCells() + reach});
-    for (int32_t ty = t0.y; ty <= t1.y; ++ty) {
-      for (int32_t tx = t0.x; tx <= t1.x; ++tx) tiles.insert({tx, ty});
-    }
-  }
-  for (const TileId& t : tiles) {
-    if (!store.hasTile(t)) continue;
-    auto tile = store.loadTile(t);
-    if (!tile.ok()) return Result<ChunkMap>::failure(tile.error());
-    map.insert(tile.value());
-  }
-  const double t0 = now();
-  for (const ChunkId& id : wanted) {
-    auto chunk = rasterizeChunk(map, id, options);
-    if (!chunk.ok()) return Result<ChunkMap>::failure(chunk.error());
-    chunks.insert(chunk.value());
-  }
-  stats.seconds = now() - t0;
-  stats.chunks = wanted.size();
-  stats.bytes = chunks.bytes();
+  std::vector<PlanCentre> plan;
+  for (const Eigen::Vector3d& c : centres) plan.push_back(c.head<2>());
+  RegionStats region;
+  auto chunks = rasterizeRegion(store, options, plan, radius_m, 1, &region);
+  if (!chunks.ok()) return chunks;
+  stats.seconds = region.raster_seconds;
+  stats.chunks = region.chunks;
+  stats.bytes = region.bytes;
   return chunks;
 }
 

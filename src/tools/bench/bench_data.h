@@ -33,7 +33,8 @@ struct RasterStats {
   size_t bytes = 0;
 };
 
-/// Loads the map's tiles around the poses and rasterizes every chunk within radius_m of any.
+/// rasterizeRegion (core/raster/raster_region.h) on one thread around the poses' x, y: every
+/// chunk with data whose square lies within radius_m of a pose.
 Result<ChunkMap> rasterizeAround(const MapStore& store, const std::vector<Eigen::Vector3d>& centres,
                                  double radius_m, const RasterOptions& options, RasterStats& stats);
 

@@ -1,7 +1,7 @@
 #pragma once
 // The rasterized map `evaluate` searches: the chunks the map server would serve along the
-// ground-truth route (ros/map_server_planner.h decides which), rasterized up front on worker
-// threads with the same rasterizer (core/rasterizer.h) and raster options.
+// ground-truth route (core/raster/chunk_planner.h decides which), rasterized up front on worker
+// threads by rasterizeRegion (core/raster/raster_region.h) with the same raster options.
 
 #include <memory>
 #include <string>

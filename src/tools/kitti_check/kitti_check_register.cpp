@@ -11,6 +11,7 @@
 #include "bench/bench_peers.h"
 #include "gmm_localization/core/common/types.h"
 #include "gmm_localization/core/map/map_store.h"
+#include "gmm_localization/core/raster/raster_region.h"
 
 namespace gmm_localization {
 namespace kitti_check {
@@ -153,9 +154,8 @@ Result<LooReport> runLeaveOneOut(const LooOptions& o) {
     if (!gmm.ok()) return R::failure(gmm.error());
     fold.map_cells = store->summary().nonEmptyCells();
     fold.overlap = overlapShare(gmm.value(), k);
-    bench::RasterStats rs;
-    auto raster = bench::rasterizeAround(store.value(), {k.truth.translation()}, o.raster_radius_m,
-                                         o.raster, rs);
+    auto raster = rasterizeRegion(store.value(), o.raster,
+                                  {PlanCentre(k.truth.translation().head<2>())}, o.raster_radius_m);
     if (!raster.ok()) return R::failure(raster.error());
 
     std::vector<Peer> peers;

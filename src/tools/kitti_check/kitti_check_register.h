@@ -1,5 +1,5 @@
 #pragma once
-// Leave-one-out registration of real keyframes (issue 3, issue 6 item 5): for each keyframe, a
+// Leave-one-out registration of real keyframes (the benchmark on real scans): for each keyframe, a
 // Gaussian mixture map from the others, and registrations of the held-out scan from seeded
 // random offsets around its SLAM pose by our Registration (paper Algorithm 1) and by PCL's NDT
 // and GICP (the benchmark's peers, src/tools/bench/bench_peers.h) started at the same offset
@@ -40,7 +40,7 @@ struct LooOptions {
   bool peers = true;
   bench::PeerOptions peer;           ///< the benchmark's defaults unless changed
   double peer_target_voxel_m = 0.5;  ///< as the benchmark's target clouds
-  double raster_radius_m = 110.0;
+  double raster_radius_m = 110.0;    ///< chunks with data within this are rasterized [m]
   RegistrationOptions registration;
   RasterOptions raster;
 };

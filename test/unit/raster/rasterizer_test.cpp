@@ -79,7 +79,7 @@ void checkAdmissible(int period, uint32_t seed) {
     for (int k = 1; k <= o.num_layers; ++k) {
       const int span = 1 << k;
       const int zgroup = 1 << o.zShift(k);
-      const int z0 = (zb >> o.zShift(k)) << o.zShift(k);
+      const int z0 = (zb >> o.zShift(k)) * (1 << o.zShift(k));  // no left shift of zb < 0
       uint8_t exact = 0;
       for (int dy = 0; dy < span; ++dy) {
         for (int dx = 0; dx < span; ++dx) {

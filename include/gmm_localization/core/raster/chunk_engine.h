@@ -9,9 +9,10 @@
 //  1. plan (under the state lock): evict held chunks farther than raster_radius + hysteresis
 //     from every centre and cached tiles farther than tile_cache_radius + hysteresis; pick the
 //     nearest needed chunk that is neither held nor being rasterized (ChunkPlanner);
-//  2. load the tiles it reads that are not cached (MapStore::loadTile, outside the lock). A tile
-//     that fails (CRC, truncated, ...) is remembered as bad for this map version, reported once
-//     through on_tile_error, and treated as empty: the chunk is still served;
+//  2. load the tiles it reads (ChunkPlanner::tilesFor: the rule of chunk_reach.h) that are not
+//     cached (MapStore::loadTile, outside the lock). A tile that fails (CRC, truncated, ...) is
+//     remembered as bad for this map version, reported once through on_tile_error, and treated
+//     as empty: the chunk is still served;
 //  3. rasterizeChunk (outside the lock), then hand the chunk to on_chunk, which publishes it and
 //     returns the chunk to hold (e.g. one sharing the published message's memory), unless the
 //     map changed or the chunk left the keep radius meanwhile.

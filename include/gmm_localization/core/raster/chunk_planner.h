@@ -4,13 +4,13 @@
 // vehicle is according to the sources the server has.
 //
 // Frames and units: everything is in the map frame [m]. A chunk (cx, cy) covers global cells
-// [cx * C, (cx + 1) * C) per axis, C = 2^chunk_shift (core/map_chunk.h), i.e. the square
+// [cx * C, (cx + 1) * C) per axis, C = 2^chunk_shift (map_chunk.h), i.e. the square
 // [origin + cx * C * res, origin + (cx + 1) * C * res) per axis.
 //
 // A chunk "has data" when any tile of the map overlaps the cells its rasterization reads: its
 // own C x C cells plus the +x/+y strip of R = 2^num_layers - 1 cells that its coarse layers'
-// blocks reach into (core/rasterizer.h). Serving such chunks even when their own cells are
-// empty keeps the coarse layers admissible bounds near the map's -x/-y edges: an absent chunk
+// blocks reach into (chunkReadTiles, chunk_reach.h). Serving such chunks even when their own cells
+// are empty keeps the coarse layers admissible bounds near the map's -x/-y edges: an absent chunk
 // reads as the floor everywhere, which would understate a block that reaches into data.
 
 #include <optional>
@@ -50,7 +50,7 @@ class ChunkPlanner {
   double distanceToTile(TileId id, const PlanCentre& p) const;
   double distanceToTile(TileId id, const std::vector<PlanCentre>& centres) const;
 
-  /// Tiles of the map that chunk `id` reads (its cells plus the +x/+y reach), ascending.
+  /// Tiles of the map that chunk `id` reads (chunkReadTiles() that the map holds), ascending.
   std::vector<TileId> tilesFor(ChunkId id) const;
   bool hasData(ChunkId id) const { return !tilesFor(id).empty(); }
 

@@ -31,9 +31,10 @@ void rasterizeCell(const GaussianMixture1D& g, int32_t zb_lo, int32_t nz, double
 
 /// Rasterizes chunk `id` of `map` (cells of 2^options.chunk_shift): the base layer, then layers
 /// 1..num_layers each from the previous one. Layer k at a cell reads base cells up to 2^k - 1
-/// beyond the chunk's +x/+y edges, so the mixtures of that strip must be in `map` when they exist
-/// (absent tiles count as empty: then the bound is exact for the map as given). Pure; safe to
-/// run on a background thread while `map` is not modified. Fails only on invalid options.
+/// beyond the chunk's +x/+y edges: it reads exactly the cells chunkReadCells() names
+/// (chunk_reach.h), so the tiles chunkReadTiles() names must be in `map` when they exist (absent
+/// tiles count as empty: then the bound is exact for the map as given). Pure; safe to run on a
+/// background thread while `map` is not modified. Fails only on invalid options.
 Result<MapChunkConstPtr> rasterizeChunk(const GmmMap& map, ChunkId id,
                                         const RasterOptions& options);
 
