@@ -8,6 +8,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <sstream>
 
@@ -108,13 +109,31 @@ std::string MapBuilderOptions::describe() const {
 
 MapBuilder::MapBuilder(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 
-MapBuilder::~MapBuilder() { impl_->removeSpillDirectory(); }
+MapBuilder::~MapBuilder() { impl_->abandon(); }
 
 void MapBuilder::Impl::removeSpillDirectory() {
+  spill.reset();
   if (spill_directory.empty()) return;
   std::error_code ec;
   fs::remove_all(spill_directory, ec);
   spill_directory.clear();
+}
+
+void MapBuilder::Impl::abandon() {
+  removeSpillDirectory();
+  if (!staging_directory.empty()) {
+    std::error_code ec;
+    fs::remove_all(staging_directory, ec);
+    staging_directory.clear();
+  }
+  lock.release();
+}
+
+std::string MapBuilder::Impl::explain(const std::string& error) const {
+  if (error.find(std::strerror(ENOSPC)) == std::string::npos) return error;
+  return "no space left on device: " + error +
+         " (a build needs room for its spill files and for the new map beside the old one; '" +
+         options.output_directory + "' is left as it was)";
 }
 
 const MapBuildStats& MapBuilder::stats() const { return impl_->stats; }
@@ -124,28 +143,44 @@ Result<std::unique_ptr<MapBuilder>> MapBuilder::create(const MapBuilderOptions& 
   using R = Result<std::unique_ptr<MapBuilder>>;
   const std::string invalid = options.validate();
   if (!invalid.empty()) return R::failure("invalid map builder options: " + invalid);
+  const std::string& dir = options.output_directory;
   std::error_code ec;
-  fs::create_directories(options.output_directory, ec);
-  if (ec || !fs::is_directory(options.output_directory)) {
-    return R::failure("cannot create output directory '" + options.output_directory +
+  fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir)) {
+    return R::failure("cannot create output directory '" + dir +
                       "': " + (ec ? ec.message() : std::string("not a directory")));
   }
-  const std::string manifest = options.output_directory + "/" + kManifestFileName;
-  if (fs::exists(manifest, ec) && !options.overwrite) {
-    return R::failure("output directory '" + options.output_directory + "' already holds a map (" +
-                      kManifestFileName + "); set overwrite (build_map: --overwrite)");
-  }
-  static std::atomic<uint64_t> counter{0};
-  const std::string parent =
-      options.temp_directory.empty() ? options.output_directory : options.temp_directory;
-  removeStaleSpillDirectories(parent);
   auto impl = std::make_unique<Impl>();
   impl->options = options;
-  impl->spill_directory = parent + "/.gmm_build_spill." + std::to_string(getpid()) + "." +
-                          std::to_string(counter.fetch_add(1));
+  if (impl->lock.tryLock(dir) == map_builder::DirectoryLock::Outcome::kBusy) {
+    return R::failure("output directory '" + dir +
+                      "' is in use by another map build (it holds the directory's lock)");
+  }
+  const std::string manifest = dir + "/" + kManifestFileName;
+  if (fs::exists(manifest, ec) && !options.overwrite) {
+    return R::failure("output directory '" + dir + "' already holds a map (" + kManifestFileName +
+                      "); set overwrite (build_map: --overwrite)");
+  }
+  // Leftovers of builds that were killed: their staging directories (undoing a half-done
+  // swap), and spill directories of this and of older versions.
+  map_builder::recoverStagingDirectories(dir, impl->lock.held());
+  removeStaleSpillDirectories(dir);
+  auto staging = map_builder::createStagingDirectory(dir);
+  if (!staging) return R::failure(impl->explain(staging.error()));
+  impl->staging_directory = *staging;
+  if (options.temp_directory.empty()) {
+    impl->spill_directory = impl->staging_directory + "/spill";
+  } else {
+    static std::atomic<uint64_t> counter{0};
+    removeStaleSpillDirectories(options.temp_directory);
+    impl->spill_directory = options.temp_directory + "/.gmm_build_spill." +
+                            std::to_string(getpid()) + "." + std::to_string(counter.fetch_add(1));
+  }
   if (!fs::create_directories(impl->spill_directory, ec) || ec) {
-    return R::failure("cannot create temporary directory '" + impl->spill_directory +
-                      "': " + ec.message());
+    const std::string why = "cannot create temporary directory '" + impl->spill_directory +
+                            "': " + (ec ? ec.message() : std::string("it already exists"));
+    impl->abandon();
+    return R::failure(impl->explain(why));
   }
   impl->spill =
       std::make_unique<map_builder::SpillStore>(impl->spill_directory, options.spill_buffer_bytes);
@@ -225,8 +260,9 @@ Status MapBuilder::addBatch(const PointBatch& batch) {
     ++st.kept_points;
     Status bs = m.binPoint(x, y, z);
     if (!bs) {
-      m.failure = bs.error();
-      return bs;
+      m.failure = m.explain(bs.error());
+      m.abandon();  // frees the disk at once; the output directory is as it was
+      return Status::failure(m.failure);
     }
   }
   return Status::success();

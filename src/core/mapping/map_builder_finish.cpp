@@ -1,11 +1,11 @@
-// Map builder, pass 2: fit and write the tiles on worker threads, then write the manifest.
+// Map builder, pass 2: fit and write the tiles into the staging directory on worker threads,
+// then swap the new map into the output directory (map_builder_staging.h).
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
 #include <condition_variable>
 #include <deque>
-#include <filesystem>
 #include <mutex>
 #include <thread>
 
@@ -15,23 +15,12 @@
 namespace gmm_localization {
 namespace {
 
-namespace fs = std::filesystem;
-
 struct TileOutcome {
   TileInfo info;
   bool written = false;  // false: the tile had no component (no file)
   uint64_t work = 0;
   std::string error;
 };
-
-/// Removes the map already in `dir` (manifest first, then its tile files), for overwrite.
-void removeOldMap(const std::string& dir) {
-  auto old = readManifest(dir);
-  std::error_code ec;
-  fs::remove(dir + "/" + kManifestFileName, ec);
-  if (!old) return;
-  for (const TileInfo& t : old->tiles) fs::remove(dir + "/" + t.file_name, ec);
-}
 
 }  // namespace
 
@@ -43,21 +32,21 @@ Result<MapBuildStats> MapBuilder::finish(const BuildProgressCallback& progress) 
   m.finished = true;
   const MapBuilderOptions& o = m.options;
   MapBuildStats& st = m.stats;
+  // Every failure below leaves the output directory as it was (see abandon()).
+  auto fail = [&](const std::string& why) {
+    m.abandon();
+    return R::failure(m.explain(why));
+  };
   if (st.kept_points == 0) {
-    m.removeSpillDirectory();
-    return R::failure("no points kept: " + std::to_string(st.input_points) + " input, " +
-                      std::to_string(st.dropped_invalid) + " invalid, " +
-                      std::to_string(st.dropped_range) + " out of range, " +
-                      std::to_string(st.dropped_height) + " outside the height band, " +
-                      std::to_string(st.dropped_voxel) + " removed by the voxel filter");
+    return fail("no points kept: " + std::to_string(st.input_points) + " input, " +
+                std::to_string(st.dropped_invalid) + " invalid, " +
+                std::to_string(st.dropped_range) + " out of range, " +
+                std::to_string(st.dropped_height) + " outside the height band, " +
+                std::to_string(st.dropped_voxel) + " removed by the voxel filter");
   }
   Status flushed = m.spill->flushAll();
-  if (!flushed) {
-    m.removeSpillDirectory();
-    return R::failure(flushed.error());
-  }
+  if (!flushed) return fail(flushed.error());
   st.spill_bytes = m.spill->bytesWritten();
-  if (o.overwrite) removeOldMap(o.output_directory);
 
   const std::vector<TileId> tiles(m.own_tiles.begin(), m.own_tiles.end());
   BuildProgress report;
@@ -99,7 +88,7 @@ Result<MapBuildStats> MapBuilder::finish(const BuildProgressCallback& progress) 
           } else {
             out.info = encoded->info;
             Status w =
-                writeFileAtomic(o.output_directory + "/" + out.info.file_name, encoded->bytes);
+                writeFileAtomic(m.staging_directory + "/" + out.info.file_name, encoded->bytes);
             if (!w) out.error = w.error();
             out.written = w.ok();
           }
@@ -129,10 +118,7 @@ Result<MapBuildStats> MapBuilder::finish(const BuildProgressCallback& progress) 
     outcomes.pop_front();
     lock.unlock();
     ++received;
-    if (out.written) {
-      m.written_files.push_back(o.output_directory + "/" + out.info.file_name);
-      manifest.tiles.push_back(out.info);
-    }
+    if (out.written) manifest.tiles.push_back(out.info);
     if (!out.error.empty()) {
       error = out.error;
       break;
@@ -143,28 +129,20 @@ Result<MapBuildStats> MapBuilder::finish(const BuildProgressCallback& progress) 
   }
   abort.store(true);
   for (std::thread& t : pool) t.join();
-  // Workers may have finished more tiles after an error: collect their files for cleanup.
-  for (const TileOutcome& out : outcomes) {
-    if (out.written) m.written_files.push_back(o.output_directory + "/" + out.info.file_name);
-  }
   m.removeSpillDirectory();
-  auto fail = [&](const std::string& why) {
-    std::error_code ec;
-    for (const std::string& f : m.written_files) fs::remove(f, ec);
-    return R::failure(why);
-  };
   if (!error.empty()) return fail(error);
   if (manifest.tiles.empty())
     return fail("no cell received a component (min_own_points too high?)");
 
   std::sort(manifest.tiles.begin(), manifest.tiles.end(),
             [](const TileInfo& a, const TileInfo& b) { return a.id < b.id; });
-  const std::vector<uint8_t> manifest_bytes = encodeManifest(manifest);
-  Status w = writeFileAtomic(o.output_directory + "/" + kManifestFileName, manifest_bytes);
-  if (!w) return fail(w.error());
+  auto manifest_bytes =
+      map_builder::commitStagedMap(o.output_directory, m.staging_directory, manifest, o.overwrite);
+  if (!manifest_bytes) return fail(manifest_bytes.error());
+  m.abandon();  // the staging directory, now empty but for the journal; and the lock
   st.tiles = manifest.tiles.size();
   st.em = em_total;
-  st.map_bytes = manifest_bytes.size();
+  st.map_bytes = *manifest_bytes;
   for (const TileInfo& t : manifest.tiles) {
     st.map_bytes += t.byte_size;
     for (int k = 0; k <= kMaxMixtureComponents; ++k)

@@ -10,18 +10,20 @@
 
 #include "gmm_localization/core/mapping/map_builder.h"
 #include "map_builder_spill.h"
+#include "map_builder_staging.h"
 
 namespace gmm_localization {
 
 struct MapBuilder::Impl {
   MapBuilderOptions options;
   MapBuildStats stats;
-  std::string spill_directory;
+  map_builder::DirectoryLock lock;  // on options.output_directory, until finish() or destruction
+  std::string staging_directory;    // <output>/.gmm_build.<pid>.<n>: the new tiles, the journal
+  std::string spill_directory;      // in staging_directory, or under options.temp_directory
   std::unique_ptr<map_builder::SpillStore> spill;
-  std::set<TileId> own_tiles;              // tiles holding at least one kept point (not only halo)
-  std::unordered_set<uint64_t> voxels;     // per-batch voxel filter scratch
-  std::vector<std::string> written_files;  // tile files of this build (removed on failure)
-  std::string failure;                     // set once a step failed: the builder is then unusable
+  std::set<TileId> own_tiles;           // tiles holding at least one kept point (not only halo)
+  std::unordered_set<uint64_t> voxels;  // per-batch voxel filter scratch
+  std::string failure;                  // set once a step failed: the builder is then unusable
   bool finished = false;
 
   // Pass 1 cache: the last tile a point went to.
@@ -30,6 +32,11 @@ struct MapBuilder::Impl {
 
   Status binPoint(double x, double y, double z);
   void removeSpillDirectory();
+  /// Removes the spill and staging directories and releases the lock (the output directory is
+  /// then as it was before create(), apart from recovered leftovers).
+  void abandon();
+  /// `error`, with an explanation prepended when it is a full disk.
+  std::string explain(const std::string& error) const;
 };
 
 }  // namespace gmm_localization

@@ -105,11 +105,16 @@ Status SpillStore::append(const TileId& tile, const std::vector<SpillRecord>& re
   const std::string p = path(tile);
   FILE* f = std::fopen(p.c_str(), truncate ? "wb" : "ab");
   if (!f) return Status::failure("spill file '" + p + "': cannot open: " + std::strerror(errno));
+  errno = 0;
   const size_t n = std::fwrite(records.data(), sizeof(SpillRecord), records.size(), f);
-  const int e = errno;
+  int e = errno;
+  // A full disk may show only when the buffered tail is written out, by fclose.
+  errno = 0;
   const bool closed = std::fclose(f) == 0;
+  if (e == 0) e = errno;
   if (n != records.size() || !closed) {
-    return Status::failure("spill file '" + p + "': write failed: " + std::strerror(e));
+    return Status::failure("spill file '" + p +
+                           "': write failed: " + (e != 0 ? std::strerror(e) : "short write"));
   }
   const uint64_t bytes = uint64_t{records.size()} * sizeof(SpillRecord);
   bytes_written_ += bytes;

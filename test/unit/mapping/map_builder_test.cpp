@@ -4,7 +4,9 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <functional>
+#include <map>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -64,6 +66,38 @@ class World {
   std::normal_distribution<float> noise_{0.f, 0.01f};
   std::vector<Eigen::Vector3f> points_;
 };
+
+/// Every regular file directly in `dir`, name -> bytes (sub-directories are left out).
+std::map<std::string, std::vector<uint8_t>> snapshot(const std::string& dir) {
+  std::map<std::string, std::vector<uint8_t>> files;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    if (!e.is_regular_file()) continue;
+    auto bytes = readFileBytes(e.path().string());
+    EXPECT_TRUE(bytes.ok()) << bytes.error();
+    if (bytes) files[e.path().filename()] = *bytes;
+  }
+  return files;
+}
+
+/// Staging directories (".gmm_build.*") in `dir`.
+std::vector<std::string> stagingDirectories(const std::string& dir) {
+  std::vector<std::string> found;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    const std::string name = e.path().filename();
+    if (name.rfind(".gmm_build.", 0) == 0) found.push_back(e.path().string());
+  }
+  return found;
+}
+
+/// The map in `dir` opens, every tile loads, and it is exactly the files `expected` holds.
+void expectIntactMap(const std::string& dir,
+                     const std::map<std::string, std::vector<uint8_t>>& expected) {
+  EXPECT_TRUE(snapshot(dir) == expected) << "the files in " << dir << " changed";
+  auto store = MapStore::open(dir);
+  ASSERT_TRUE(store.ok()) << store.error();
+  EXPECT_TRUE(store->verify().empty());
+  EXPECT_EQ(store->tileIds().size() + 1, expected.size());
+}
 
 MapBuilderOptions options(const std::string& dir, int tile_size = 64) {
   MapBuilderOptions o;
@@ -377,6 +411,215 @@ TEST(MapBuilder, RefusesToOverwriteUnlessAsked) {
   ASSERT_TRUE(store.ok()) << store.error();
   EXPECT_EQ(dir.entries().size(), 2u);  // the old map's tiles are gone
   EXPECT_TRUE(store->verify().empty());
+}
+
+TEST(MapBuilder, OverwriteReplacesTheMapAndAlternatesTileFileNames) {
+  TempDir dir;
+  World big, small;
+  big.plane(0.0, 20.0, 0.0, 20.0, 0.0);
+  small.plane(0.0, 2.0, 0.0, 2.0, 1.0);
+  ASSERT_TRUE(build(big, options(dir.path, 32)).ok());
+  MapBuilderOptions o = options(dir.path, 32);
+  o.overwrite = true;
+  for (const char* expected_name : {"tile_0_0.g1.gmt", "tile_0_0.gmt", "tile_0_0.g1.gmt"}) {
+    auto store = build(small, o);
+    ASSERT_TRUE(store.ok()) << store.error();
+    ASSERT_EQ(store->tileIds(), (std::vector<TileId>{{0, 0}}));
+    EXPECT_EQ(store->tileInfo({0, 0})->file_name, expected_name);
+    EXPECT_EQ(dir.entries(), (std::vector<std::string>{"manifest.gmm", expected_name}));
+    auto map = store->loadAll();
+    ASSERT_TRUE(map.ok()) << map.error();
+    const auto g = cellAt(*map, 1.0, 1.0);
+    ASSERT_EQ(g.size(), 1);
+    EXPECT_NEAR(g.component(0).mean_m, 1.0, 0.01);  // the small world's height
+  }
+}
+
+TEST(MapBuilder, FailedOverwriteLeavesTheOldMapByteIdentical) {
+  TempDir dir;
+  World old_world, new_world;
+  old_world.plane(0.0, 12.0, 0.0, 12.0, 0.5);
+  new_world.plane(0.0, 20.0, 0.0, 20.0, 2.0);  // 4 x 4 tiles of 6.4 m
+  ASSERT_TRUE(build(old_world, options(dir.path, 32)).ok());
+  const auto old_files = snapshot(dir.path);
+  ASSERT_GT(old_files.size(), 2u);
+  MapBuilderOptions o = options(dir.path, 32);
+  o.overwrite = true;
+  o.threads = 1;
+
+  {  // Pass 1: the staging directory vanishes (an I/O error) while spill files are flushed.
+    MapBuilderOptions small_buffer = o;
+    small_buffer.spill_buffer_bytes = size_t{1} << 20;
+    auto b = MapBuilder::create(small_buffer);
+    ASSERT_TRUE(b.ok()) << b.error();
+    const auto staging = stagingDirectories(dir.path);
+    ASSERT_EQ(staging.size(), 1u);
+    fs::remove_all(staging[0]);
+    Status s = new_world.feed(**b, 500);
+    ASSERT_FALSE(s.ok());
+    EXPECT_NE(s.error().find("spill file"), std::string::npos) << s.error();
+    EXPECT_FALSE((*b)->finish().ok());
+    b->reset();
+    expectIntactMap(dir.path, old_files);
+  }
+  {  // Pass 2: the staging directory vanishes after the first tile.
+    auto b = MapBuilder::create(o);
+    ASSERT_TRUE(b.ok()) << b.error();
+    ASSERT_TRUE(new_world.feed(**b).ok());
+    expectIntactMap(dir.path, old_files);  // during the build too
+    auto st = (*b)->finish([&](const BuildProgress& p) {
+      if (p.tiles_done == 1) fs::remove_all(stagingDirectories(dir.path).at(0));
+      return true;
+    });
+    ASSERT_FALSE(st.ok());  // the next tile's spill file or tile file is gone
+    EXPECT_TRUE(st.error().find("spill file") != std::string::npos ||
+                st.error().find("cannot write") != std::string::npos)
+        << st.error();
+    expectIntactMap(dir.path, old_files);
+  }
+  {  // Pass 2: cancelled after two tiles.
+    auto b = MapBuilder::create(o);
+    ASSERT_TRUE(b.ok()) << b.error();
+    ASSERT_TRUE(new_world.feed(**b).ok());
+    auto st = (*b)->finish([](const BuildProgress& p) { return p.tiles_done < 2; });
+    ASSERT_FALSE(st.ok());
+    EXPECT_NE(st.error().find("cancelled"), std::string::npos) << st.error();
+    expectIntactMap(dir.path, old_files);
+  }
+  {  // The swap: the last tile cannot be moved in (a directory holds its name), so the tiles
+     // already moved are taken out again.
+    const std::string obstacle = dir.path + "/tile_3_3.g1.gmt";
+    fs::create_directories(obstacle + "/inside");
+    auto b = MapBuilder::create(o);
+    ASSERT_TRUE(b.ok()) << b.error();
+    ASSERT_TRUE(new_world.feed(**b).ok());
+    auto st = (*b)->finish();
+    ASSERT_FALSE(st.ok());
+    EXPECT_NE(st.error().find("cannot move tile file"), std::string::npos) << st.error();
+    EXPECT_TRUE(stagingDirectories(dir.path).empty());
+    expectIntactMap(dir.path, old_files);
+    fs::remove_all(obstacle);
+  }
+  {  // Nothing kept.
+    MapBuilderOptions none = o;
+    none.min_z_m = 100.0;
+    auto b = MapBuilder::create(none);
+    ASSERT_TRUE(b.ok()) << b.error();
+    ASSERT_TRUE(new_world.feed(**b).ok());
+    ASSERT_FALSE((*b)->finish().ok());
+    expectIntactMap(dir.path, old_files);
+  }
+  EXPECT_EQ(dir.entries().size(), old_files.size());  // no staging directory left anywhere
+  auto store = build(new_world, o);                   // and then a build that succeeds
+  ASSERT_TRUE(store.ok()) << store.error();
+  EXPECT_EQ(store->tileIds().size(), 16u);
+  EXPECT_TRUE(store->verify().empty());
+  EXPECT_EQ(dir.entries().size(), 17u);
+}
+
+/// Writes a staging directory as a build killed during the swap leaves it (journal: `names`).
+void writeDeadStaging(const std::string& dir, const std::vector<std::string>& names) {
+  // pid 2^22 + 1 is above Linux's pid_max limit: no such process can exist.
+  const std::string staging = dir + "/.gmm_build.4194305.0";
+  fs::create_directories(staging + "/spill");
+  std::ofstream(staging + "/spill/t_0_0.spill") << "spill";
+  std::ofstream journal(staging + "/journal");
+  journal << "gmm_build journal 1\n";
+  for (const std::string& n : names) journal << n << "\n";
+}
+
+TEST(MapBuilder, RecoversFromABuildKilledDuringTheSwap) {
+  TempDir dir, other;
+  World old_world, new_world;
+  old_world.plane(0.0, 12.0, 0.0, 12.0, 0.5);  // 2 x 2 tiles of 6.4 m
+  new_world.plane(0.0, 20.0, 0.0, 20.0, 2.0);  // 4 x 4 tiles
+  ASSERT_TRUE(build(old_world, options(dir.path, 32)).ok());
+  ASSERT_TRUE(build(new_world, options(other.path, 32)).ok());
+  const auto old_files = snapshot(dir.path);
+  const auto new_files = snapshot(other.path);
+  auto old_manifest = readManifest(dir.path);
+  auto new_manifest = readManifest(other.path);
+  ASSERT_TRUE(old_manifest.ok() && new_manifest.ok());
+  std::vector<std::string> journal;
+  for (TileInfo& t : new_manifest->tiles) {
+    t.file_name = t.file_name.substr(0, t.file_name.size() - 4) + ".g1.gmt";
+    journal.push_back(t.file_name);
+  }
+  for (const TileInfo& t : old_manifest->tiles) journal.push_back(t.file_name);
+  auto moveNewTilesIn = [&](size_t count) {
+    for (size_t i = 0; i < count; ++i) {
+      const TileInfo& t = new_manifest->tiles[i];
+      ASSERT_TRUE(
+          writeFileAtomic(dir.path + "/" + t.file_name, new_files.at(tileFileName(t.id))).ok());
+    }
+  };
+  MapBuilderOptions o = options(dir.path, 32);
+  o.overwrite = true;
+
+  // Killed while moving tiles in (step 3): the old map is whole; the next build takes the new
+  // tiles out again.
+  moveNewTilesIn(5);
+  writeDeadStaging(dir.path, journal);
+  auto mid = MapStore::open(dir.path);
+  ASSERT_TRUE(mid.ok()) << mid.error();
+  EXPECT_TRUE(mid->verify().empty());
+  {
+    auto b = MapBuilder::create(o);
+    ASSERT_TRUE(b.ok()) << b.error();
+    EXPECT_EQ(stagingDirectories(dir.path).size(), 1u);  // the new builder's own
+  }
+  expectIntactMap(dir.path, old_files);
+  EXPECT_TRUE(stagingDirectories(dir.path).empty());
+
+  // Killed after the commit, while deleting the old tiles (step 5): the new map is whole; the
+  // next build deletes the rest of the old tiles.
+  moveNewTilesIn(new_manifest->tiles.size());
+  ASSERT_TRUE(writeManifest(dir.path, *new_manifest).ok());
+  fs::remove(dir.path + "/" + old_manifest->tiles[0].file_name);
+  writeDeadStaging(dir.path, journal);
+  const auto committed = snapshot(dir.path);
+  {
+    auto b = MapBuilder::create(o);
+    ASSERT_TRUE(b.ok()) << b.error();
+  }
+  auto store = MapStore::open(dir.path);
+  ASSERT_TRUE(store.ok()) << store.error();
+  EXPECT_TRUE(store->verify().empty());
+  EXPECT_EQ(store->tileIds().size(), 16u);
+  const auto after = snapshot(dir.path);
+  EXPECT_EQ(after.size(), 17u);  // the manifest and the new tiles only
+  for (const auto& [name, bytes] : after) EXPECT_TRUE(committed.at(name) == bytes) << name;
+  EXPECT_TRUE(stagingDirectories(dir.path).empty());
+
+  // Killed in pass 2 (no journal yet): the staging directory simply goes.
+  writeDeadStaging(dir.path, {});
+  fs::remove(dir.path + "/.gmm_build.4194305.0/journal");
+  std::ofstream(dir.path + "/.gmm_build.4194305.0/tile_0_0.gmt") << "half a tile";
+  EXPECT_FALSE(MapStore::open(dir.path + "/.gmm_build.4194305.0").ok());  // never a map
+  {
+    auto b = MapBuilder::create(o);
+    ASSERT_TRUE(b.ok()) << b.error();
+  }
+  EXPECT_TRUE(snapshot(dir.path) == after);
+  EXPECT_TRUE(stagingDirectories(dir.path).empty());
+}
+
+TEST(MapBuilder, OneBuilderPerOutputDirectory) {
+  TempDir dir;
+  World w;
+  w.plane(0.0, 2.0, 0.0, 2.0, 0.0);
+  auto first = MapBuilder::create(options(dir.path));
+  ASSERT_TRUE(first.ok()) << first.error();
+  auto second = MapBuilder::create(options(dir.path));
+  ASSERT_FALSE(second.ok());
+  EXPECT_NE(second.error().find("in use by another map build"), std::string::npos)
+      << second.error();
+  EXPECT_EQ(stagingDirectories(dir.path).size(), 1u);  // the first one's, left alone
+  ASSERT_TRUE(w.feed(**first).ok());
+  ASSERT_TRUE((*first)->finish().ok());  // finish() releases the directory
+  MapBuilderOptions o = options(dir.path);
+  o.overwrite = true;
+  EXPECT_TRUE(MapBuilder::create(o).ok());
 }
 
 TEST(MapBuilder, OptionsValidateNamesTheField) {

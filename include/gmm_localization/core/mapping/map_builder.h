@@ -5,15 +5,16 @@
 //
 // Streaming, in two passes, so memory does not grow with the size of the map:
 //  1. addBatch() filters each batch and bins its points, as (cell, z-bin, count) records, into
-//     one spill file per tile in a temporary directory. A point within blur_radius_cells of a
-//     tile border is also written to the neighbouring tiles' spill files (a halo), so each tile
-//     can later be processed alone. Records are buffered per tile, merged (same cell and z bin
-//     -> one record with a count) and appended to disk when a buffer fills; at most
-//     spill_buffer_bytes are held in memory.
+//     one spill file per tile in a temporary directory (in the staging directory, see below). A
+//     point within blur_radius_cells of a tile border is also written to the neighbouring tiles'
+//     spill files (a halo), so each tile can later be processed alone. Records are buffered per
+//     tile, merged (same cell and z bin: one record with a count) and appended to disk when a
+//     buffer fills; at most spill_buffer_bytes are held in memory.
 //  2. finish() processes the tiles one at a time on `threads` worker threads: read the tile's
 //     spill file, build each column's z histogram, blur, fit, encode and write the tile file
-//     (atomically), then delete the spill file. The manifest is written last, atomically: a
-//     directory without a manifest is not a map.
+//     (atomically) into the staging directory, then delete the spill file. Last, the new map is
+//     swapped into the output directory; its manifest is the commit: a directory without a
+//     manifest is not a map.
 // Only one tile's histogram per worker is ever in memory.
 //
 // The blur (paper: "to capture the variance of our LIDAR scanner and reduce discretization
@@ -43,10 +44,40 @@
 //
 // Threading: addBatch() and finish() must be called from one thread (the caller's); finish()
 // uses worker threads internally and calls the progress callback from the caller's thread.
+//
+// Replacing a map: a build never writes into the map in place. create() takes an exclusive
+// flock(2) on the output directory (a second builder of the same directory, in any process,
+// fails) and makes the staging directory `<output>/.gmm_build.<pid>.<n>/`, which receives the
+// spill files (unless temp_directory is set) and the new tile files. finish() then swaps:
+//  1. it names the new tiles `tile_<tx>_<ty>.gmt`, or, when the map in place uses those names
+//     (an overwrite), `tile_<tx>_<ty>.g1.gmt` (g2, ... should those be taken too): rebuilt maps
+//     alternate between the two sets of names. Readers take each tile's file name from the
+//     manifest (TileInfo::file_name), so old and new maps load alike;
+//  2. it writes the journal `<staging>/journal`: the line "gmm_build journal 1", then one file
+//     name per line, the new tiles' and the old map's tiles';
+//  3. it moves the tiles into the output directory (rename(2), same file system; none of the
+//     names is the old map's) and fsyncs the directory;
+//  4. it writes the new manifest into staging as `manifest.next` and renames it over
+//     `<output>/manifest.gmm`. That one rename is the commit: before it the directory holds the
+//     old map, byte-identical, after it the new one, complete;
+//  5. it deletes the old map's tile files, then the staging directory.
+// A failure before the commit (I/O error, full disk, cancel, no points) removes what the build
+// moved in and its staging directory: the output directory is as it was. A process killed
+// outright leaves its staging directory; the next create() on that directory (holding the lock,
+// it knows the owner is gone) deletes every file the journal names that the manifest then in
+// place does not reference, which undoes a half-done step 3 or completes step 5, and then the
+// staging directory. A staging directory never holds a `manifest.gmm`, and MapStore reads only
+// the files its manifest names, so a half-written build is never taken for a map. Where flock is
+// not supported (some network file systems) there is no lock, and only staging directories whose
+// process no longer exists are recovered. A process that opened the old map (MapStore reads the
+// manifest once) sees its tiles vanish at step 5: restart it on the new map.
+// Disk space: until the commit, the old map, the new map and the spill files coexist; a full disk
+// fails the build with an error starting "no space left on device", the old map intact.
+//
 // Failure: every method returns a Status/Result with a reason; the destructor removes the
-// temporary directory whatever happened, and a failed finish() removes the tile files it wrote.
-// A process killed outright leaves its `.gmm_build_spill.<pid>.<n>` directory behind; the next
-// create() in the same place removes those whose process is gone.
+// staging and spill directories whatever happened. create() also removes the spill directories
+// (`.gmm_build_spill.<pid>.<n>`, in temp_directory or, from older versions, in the output
+// directory) of processes that are gone.
 
 #include <array>
 #include <cstdint>
@@ -65,9 +96,11 @@ namespace gmm_localization {
 
 struct MapBuilderOptions {
   std::string output_directory;  ///< created if missing
-  bool overwrite = false;        ///< replace a map already there (its manifest is removed first)
-  MapGeometry geometry;          ///< resolution (paper: 20 cm), tile size, origin
-  EmFitterOptions em;            ///< K_max (default 2), sigma floor, criterion
+  /// Replace a map already there. The old map stays whole until the new one is complete and
+  /// swapped in (see "Replacing a map"); false: create() fails when the directory holds a map.
+  bool overwrite = false;
+  MapGeometry geometry;  ///< resolution (paper: 20 cm), tile size, origin
+  EmFitterOptions em;    ///< K_max (default 2), sigma floor, criterion
 
   double blur_sigma_m = 0.10;      ///< Gaussian kernel sigma [m], >= 0 (0: no blur)
   int blur_radius_cells = 1;       ///< kernel half-width [cells], in [0, min(8, tile size / 4)]
@@ -82,7 +115,7 @@ struct MapBuilderOptions {
   double voxel_m = 0.0;  ///< per-batch voxel filter edge [m], 0 = off, else >= 0.005
 
   int threads = 2;             ///< worker threads in finish(), in [1, 64]
-  std::string temp_directory;  ///< parent of the spill directory; empty: output_directory
+  std::string temp_directory;  ///< parent of the spill directory; empty: the staging directory
   size_t spill_buffer_bytes = size_t{256} << 20;  ///< in-memory spill buffers, >= 1 MiB
   TileCodecOptions codec;
   Georeference georeference;  ///< written to the manifest
@@ -103,7 +136,7 @@ struct MapBuildStats {
   uint64_t dropped_range = 0;
   uint64_t dropped_height = 0;
   uint64_t dropped_voxel = 0;
-  uint64_t spill_bytes = 0;  ///< written to the temporary directory
+  uint64_t spill_bytes = 0;  ///< written to the spill directory
   uint64_t tiles = 0;        ///< tile files written
   std::array<uint64_t, kMaxMixtureComponents + 1> cells_by_components{};  ///< over written tiles
   uint64_t map_bytes = 0;  ///< tile files + manifest [bytes]
@@ -123,18 +156,21 @@ using BuildProgressCallback = std::function<bool(const BuildProgress&)>;
 
 class MapBuilder {
  public:
-  /// Validates the options, creates the output directory and the temporary spill directory.
-  /// Fails when the output already holds a map and overwrite is false.
+  /// Validates the options, creates the output directory, locks it, recovers the leftovers of
+  /// killed builds there, and creates the staging and spill directories. Fails when the output
+  /// already holds a map and overwrite is false, or when another builder holds the directory.
   static Result<std::unique_ptr<MapBuilder>> create(const MapBuilderOptions& options);
-  ~MapBuilder();  // removes the spill directory
+  ~MapBuilder();  // removes the staging and spill directories, releases the lock
   MapBuilder(const MapBuilder&) = delete;
   MapBuilder& operator=(const MapBuilder&) = delete;
 
-  /// Pass 1 for one batch. Fails on a spill write error (the builder is then unusable).
+  /// Pass 1 for one batch. Fails on a spill write error (the builder is then unusable, and its
+  /// staging directory already removed).
   Status addBatch(const PointBatch& batch);
 
-  /// Pass 2 and the manifest. Call once; the builder is spent afterwards. Fails when no point
-  /// was kept, on I/O errors, or when the callback cancels.
+  /// Pass 2 and the swap. Call once; the builder is spent afterwards (and the lock released).
+  /// Fails, leaving the output directory as it was, when no point was kept, on I/O errors, when
+  /// the callback cancels, or when the directory gained a map meanwhile and overwrite is false.
   Result<MapBuildStats> finish(const BuildProgressCallback& progress = {});
 
   /// Counters so far (pass 1 counters grow with addBatch; the rest are set by finish()).
