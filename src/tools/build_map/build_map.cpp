@@ -5,6 +5,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <exception>
 #include <iostream>
 #include <memory>
 
@@ -25,7 +26,13 @@ Result<std::unique_ptr<PointBatchSource>> openSource(const BuildMapConfig& c) {
   map_T_world.translation() = -c.offset_m;
   switch (c.input) {
     case InputKind::kPcd: {
-      auto s = PcdSource::open(c.pcd_path, c.pcd_batch_points, c.offset_m);
+      PcdSourceOptions p;
+      p.paths = c.pcd_paths;
+      p.batch_points = c.pcd_batch_points;
+      p.world_T_file = c.pcd_world_T_file;
+      p.offset_m = c.offset_m;
+      p.max_abs_z_m = c.pcd_max_abs_z_m;
+      auto s = PcdSource::open(p);
       if (!s) return R::failure(s.error());
       return R(std::unique_ptr<PointBatchSource>(std::move(*s)));
     }
@@ -78,6 +85,13 @@ double processCpuSeconds() {
   return u.ru_utime.tv_sec + u.ru_stime.tv_sec + 1e-6 * (u.ru_utime.tv_usec + u.ru_stime.tv_usec);
 }
 
+/// Prints the source's new warnings (PCD input), each on its own line.
+void printWarnings(PointBatchSource& src) {
+  auto* pcd = dynamic_cast<PcdSource*>(&src);
+  if (!pcd) return;
+  for (const std::string& w : pcd->takeWarnings()) std::cerr << "build_map: warning: " << w << "\n";
+}
+
 std::string mb(uint64_t bytes) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.2f MB", bytes / 1e6);
@@ -92,7 +106,7 @@ std::string pct(uint64_t part, uint64_t whole) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   auto config = parseBuildMapArgs(argc, argv);
   if (!config) {
     std::cerr << "build_map: " << config.error() << "\n";
@@ -109,6 +123,7 @@ int main(int argc, char** argv) {
     return 1;
   }
   PointBatchSource& src = **source;
+  printWarnings(src);
   c.builder.provenance = "build_map from " + src.describe();
   auto builder = MapBuilder::create(c.builder);
   if (!builder) {
@@ -130,7 +145,9 @@ int main(int argc, char** argv) {
     const auto t1 = Clock::now();
     source_s += std::chrono::duration<double>(t1 - t0).count();
     if (!more) {
-      std::cerr << "\nbuild_map: " << more.error() << "\n";
+      std::cerr << "\n";
+      printWarnings(src);
+      std::cerr << "build_map: " << more.error() << "\n";
       return 1;
     }
     if (!*more) break;
@@ -149,6 +166,7 @@ int main(int argc, char** argv) {
   }
   read_bar.finish(withCommas(b.stats().input_points) + " points, " +
                   withCommas(b.stats().kept_points) + " kept");
+  printWarnings(src);
 
   // Pass 2: fit and write.
   ProgressBar fit_bar("fitting", !c.quiet);
@@ -177,6 +195,8 @@ int main(int argc, char** argv) {
   std::printf("  input            %s\n", src.describe().c_str());
   if (auto* bag = dynamic_cast<RosbagSource*>(&src))
     std::printf("  skipped scans    %s\n", bag->skipped().c_str());
+  if (auto* pcd = dynamic_cast<PcdSource*>(&src))
+    std::printf("  dropped on read  %s\n", pcd->dropped().c_str());
   std::printf("  output           %s\n", c.builder.output_directory.c_str());
   std::printf("  options          %s\n", c.builder.describe().c_str());
   std::printf(
@@ -225,4 +245,17 @@ int main(int argc, char** argv) {
       withCommas(static_cast<uint64_t>(build_cpu_s > 0 ? s.input_points / build_cpu_s : 0))
           .c_str());
   return 0;
+}
+
+int main(int argc, char** argv) {
+  // Every reader reports errors as values; this is the last line of defence against a library
+  // (rosbag, the standard library) throwing.
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "\nbuild_map: error: " << e.what() << "\n";
+  } catch (...) {
+    std::cerr << "\nbuild_map: error: unknown exception\n";
+  }
+  return 1;
 }

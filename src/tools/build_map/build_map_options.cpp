@@ -15,11 +15,21 @@ const char* buildMapHelp() {
 
 Usage: build_map --output DIR INPUT [options]
 
-Input (exactly one):
-  --pcd FILE               a point-cloud map (PCD, any point type with x y z), e.g. from LIO-SAM
-                           or hdl_graph_slam, in the map frame. It has no sensor origins, so the
-                           range filter does not apply. PCL loads the whole file (the builder
-                           itself streams); it is fed in batches of --pcd-batch points (1000000).
+Input (exactly one kind):
+  --pcd FILE|DIR           a point-cloud map (PCD v0.5-0.7: ascii, binary or binary_compressed;
+                           x y z of any numeric type, F4, F8, I/U 1-8 bytes, read in double),
+                           e.g. from LIO-SAM, FAST-LIO or hdl_graph_slam. Repeat for several
+                           files; a directory stands for every *.pcd in it, sorted by name
+                           (Autoware's tiles). Every file is checked before the build starts
+                           (header, data size, compressed stream): a bad file is an error
+                           naming it. No sensor origins, so the range filter does not apply.
+                           Files are streamed in batches of --pcd-batch points (1000000).
+    --transform X,Y,Z,ROLL,PITCH,YAW   or X,Y,Z,QX,QY,QZ,QW: the files' frame in the world
+                           frame [m, deg], applied to every point first (e.g. to level
+                           FAST-LIO's first-IMU frame); --offset is subtracted after it:
+                           p_map = transform * p_file - offset, in double, then float
+    --max-abs-z M          drop (and count) points with map-frame |z| above M, e.g. junk
+                           returns far above the map (3000); non-finite points are dropped too
   --kitti DIR              KITTI-style scans: DIR/NNNNNN.bin, DIR/NNNNNN/points.bin or
                            DIR/velodyne/NNNNNN.bin, float32 little-endian records
     --kitti-fields F       auto | xyz | xyzi (auto: xyzi under velodyne/, else from the file
@@ -48,7 +58,8 @@ Input (exactly one):
 
 Output:
   --output DIR             map directory (created); refuses to replace a map unless --overwrite
-  --overwrite              replace the map in DIR (its manifest is removed first)
+  --overwrite              replace the map in DIR: the new map is built beside it and swapped
+                           in when complete; a failed or killed build leaves the old map intact
 
 Map (defaults follow the paper):
   --resolution M           cell size (0.2)
@@ -67,7 +78,9 @@ Filters (applied in this order; counts in the summary):
   --min-z M, --max-z M     map-frame height band (unbounded)
   --voxel M                per-scan voxel pre-filter edge, 0 = off (0)
   --offset X,Y,Z           subtracted from every input point and pose, e.g. a UTM origin, to
-                           keep map coordinates small; recorded as the map's georeference
+                           keep map coordinates small (in double, before float: a float32 map
+                           keeps centimetres only within 131 km of its origin); recorded as
+                           the map's georeference
   --datum TEXT             georeference text, e.g. "WGS84 / UTM zone 17N"
 
 Resources:
@@ -147,7 +160,8 @@ Result<BuildMapConfig> parseBuildMapArgs(int argc, char** argv) {
   MapBuilderOptions& b = c.builder;
   std::string error;
   auto setInput = [&](InputKind k, const std::string& opt) {
-    if (c.input != InputKind::kNone) error = opt + ": give exactly one input";
+    const bool more_pcd = k == InputKind::kPcd && c.input == InputKind::kPcd;
+    if (c.input != InputKind::kNone && !more_pcd) error = opt + ": give exactly one input";
     c.input = k;
   };
   // Options with a value: name -> handler(value).
@@ -175,14 +189,33 @@ Result<BuildMapConfig> parseBuildMapArgs(int argc, char** argv) {
   };
   int k_max = b.em.max_components, seed = 1, spill_mb = 256;
   double pcd_batch = 1e6;
+  std::string pcd_only;  // the last PCD-only option given
   std::map<std::string, Handler> valued = {
       {"--output", str(b.output_directory)},
       {"--pcd",
        [&](const std::string& o, const std::string& v) {
          setInput(InputKind::kPcd, o);
-         c.pcd_path = v;
+         c.pcd_paths.push_back(v);
        }},
       {"--pcd-batch", num(pcd_batch)},
+      {"--transform",
+       [&](const std::string& o, const std::string& v) {
+         auto t = parseTransform(o, v);
+         if (t)
+           c.pcd_world_T_file = *t;
+         else
+           error = t.error();
+         pcd_only = o;
+       }},
+      {"--max-abs-z",
+       [&](const std::string& o, const std::string& v) {
+         auto x = number(o, v);
+         if (x)
+           c.pcd_max_abs_z_m = *x;
+         else
+           error = x.error();
+         pcd_only = o;
+       }},
       {"--kitti",
        [&](const std::string& o, const std::string& v) {
          setInput(InputKind::kKitti, o);
@@ -314,6 +347,9 @@ Result<BuildMapConfig> parseBuildMapArgs(int argc, char** argv) {
   if (!(pcd_batch >= 1000 && pcd_batch <= 1e8))
     return R::failure("--pcd-batch must be in [1000, 1e8]");
   c.pcd_batch_points = static_cast<size_t>(pcd_batch);
+  if (!pcd_only.empty() && c.input != InputKind::kPcd)
+    return R::failure(pcd_only + " applies to --pcd input only");
+  if (!(c.pcd_max_abs_z_m > 0.0)) return R::failure("--max-abs-z must be > 0");
   if (c.bag.every < 1) return R::failure("--every must be >= 1");
   if (!(c.bag.max_pose_gap_s > 0.0)) return R::failure("--max-pose-gap must be > 0");
   if (!(c.synthetic.length_m >= 10.0 && c.synthetic.length_m <= 100000.0)) {

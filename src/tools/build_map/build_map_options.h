@@ -37,8 +37,11 @@ struct SyntheticStreetOptions {
 struct BuildMapConfig {
   MapBuilderOptions builder;
   InputKind input = InputKind::kNone;
-  std::string pcd_path;
+  std::vector<std::string> pcd_paths;  ///< --pcd, repeatable: files or directories of *.pcd
   size_t pcd_batch_points = 1000000;
+  /// --transform: the PCD files' frame in the world frame, applied before the offset.
+  Eigen::Isometry3d pcd_world_T_file = Eigen::Isometry3d::Identity();
+  double pcd_max_abs_z_m = 3000.0;  ///< --max-abs-z: PCD points beyond are dropped, counted
   KittiSourceOptions kitti;
   std::string kitti_calib;  ///< KITTI odometry calib.txt (camera poses -> Velodyne, z up)
   BagInputOptions bag;

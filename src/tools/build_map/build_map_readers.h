@@ -1,10 +1,11 @@
 #pragma once
-// PointBatchSource implementations that need PCL or ROS (the KITTI reader is in the core,
-// core/kitti_source.h; the synthetic street is in build_map_synthetic.h). Library target
+// PointBatchSource implementations for PCD maps and rosbags (the KITTI reader is in the core,
+// core/mapping/kitti_source.h; the synthetic street is in build_map_synthetic.h). Library target
 // gmm_map_readers (cmake/tools/map.cmake), for build_map and any other tool or node.
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <Eigen/Geometry>
 
@@ -14,18 +15,47 @@
 namespace gmm_localization {
 namespace tools {
 
-/// A PCD point-cloud map (any point type with x, y, z), in the map frame, fed in batches of
-/// `batch_points`. No sensor origin (range filters do not apply). `offset_m` is subtracted
-/// from every point. PCL reads the whole file into memory on open().
+struct PcdSourceOptions {
+  /// PCD files and directories; a directory stands for every *.pcd file in it (not recursive),
+  /// sorted by name (Autoware's tiled maps). Files are read in the order given.
+  std::vector<std::string> paths;
+  size_t batch_points = 1000000;  ///< points per batch (batches never span two files)
+  /// Applied first, in double: the file's frame in the world frame (p_world = world_T_file *
+  /// p_file), for maps whose frame is not gravity-aligned (FAST-LIO's first IMU frame).
+  Eigen::Isometry3d world_T_file = Eigen::Isometry3d::Identity();
+  /// Subtracted next, in double (p_map = p_world - offset_m), before narrowing to float: a UTM
+  /// origin keeps map coordinates small. It is the map's georeference (map + offset = world).
+  Eigen::Vector3d offset_m = Eigen::Vector3d::Zero();
+  /// Points with map-frame |z| above this [m] are dropped and counted (junk returns far above
+  /// or below the map would otherwise make absurd cells), as are non-finite points.
+  double max_abs_z_m = 3000.0;
+};
+
+/// A point-cloud map in one or more PCD files (ascii, binary or binary_compressed; x, y, z of
+/// any numeric type, read in double: pcd_reader.h), fed in batches without sensor origin
+/// (range filters do not apply). open() checks every file (header, data size, compressed
+/// stream, ascii lines) before the first point is produced, so a bad file fails the build
+/// before it starts, with an error naming the file. Files are then read one at a time, in
+/// batches (only a binary_compressed file is held whole in memory, decompressed).
+/// Dropped points (non-finite, |z| beyond max_abs_z_m) are counted (dropped()); next() fails
+/// at the end when no point at all was kept.
 class PcdSource : public PointBatchSource {
  public:
-  static Result<std::unique_ptr<PcdSource>> open(const std::string& path, size_t batch_points,
-                                                 const Eigen::Vector3d& offset_m);
+  static Result<std::unique_ptr<PcdSource>> open(const PcdSourceOptions& options);
   ~PcdSource() override;
   Result<bool> next(PointBatch& batch) override;
   size_t sizeHint() const override;
   std::string describe() const override;
-  size_t points() const;
+  size_t points() const;  ///< in the files' headers
+  const std::vector<std::string>& files() const;
+  /// Points dropped so far, and why (one line), e.g. "3 (2 non-finite, 1 out of range ...)".
+  std::string dropped() const;
+  uint64_t droppedPoints() const;
+  /// Warnings since the last call, one sentence each: oddities of the files (data after the
+  /// last point, a VIEWPOINT that is not identity), float32 coordinates too large for
+  /// centimetres, and at the end of the input the dropped points and map-frame coordinates
+  /// far from the origin (float32 precision).
+  std::vector<std::string> takeWarnings();
 
  private:
   struct Impl;

@@ -1,9 +1,7 @@
-// build_map's inputs that need PCL or ROS: a PCD map, a rosbag; plus its command line and the
-// synthetic street. No ROS master is needed (rosbag files are written and read directly).
+// build_map's rosbag input, its command line and the synthetic street (the PCD input is tested
+// in pcd_reader_test.cpp). No ROS master is needed (rosbag files are written and read directly).
 #include <geometry_msgs/TransformStamped.h>
 #include <nav_msgs/Odometry.h>
-#include <pcl/io/pcd_io.h>
-#include <pcl/point_types.h>
 #include <rosbag/bag.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <tf2_msgs/TFMessage.h>
@@ -32,38 +30,6 @@ struct TempDir {
   ~TempDir() { fs::remove_all(path); }
   std::string path;
 };
-
-TEST(PcdSource, ReadsInBatchesWithOffsetAndNoOrigin) {
-  TempDir dir;
-  pcl::PointCloud<pcl::PointXYZI> cloud;
-  for (int i = 0; i < 2500; ++i) {
-    pcl::PointXYZI p;
-    p.x = 1000.f + i * 0.01f;
-    p.y = 2000.f;
-    p.z = 0.5f;
-    p.intensity = 7.f;
-    cloud.push_back(p);
-  }
-  const std::string path = dir.path + "/map.pcd";
-  ASSERT_EQ(pcl::io::savePCDFileBinary(path, cloud), 0);
-  auto src = PcdSource::open(path, 1000, Eigen::Vector3d(1000.0, 2000.0, 0.0));
-  ASSERT_TRUE(src.ok()) << src.error();
-  EXPECT_EQ((*src)->sizeHint(), 3u);
-  PointBatch b;
-  std::vector<size_t> sizes;
-  while (true) {
-    auto more = (*src)->next(b);
-    ASSERT_TRUE(more.ok());
-    if (!*more) break;
-    EXPECT_FALSE(b.has_sensor_origin);
-    sizes.push_back(b.points_m.size());
-  }
-  EXPECT_EQ(sizes, (std::vector<size_t>{1000, 1000, 500}));
-  EXPECT_TRUE(b.points_m.empty());  // cleared at the end
-  auto missing = PcdSource::open(dir.path + "/none.pcd", 1000, Eigen::Vector3d::Zero());
-  ASSERT_FALSE(missing.ok());
-  EXPECT_NE(missing.error().find("none.pcd"), std::string::npos);
-}
 
 sensor_msgs::PointCloud2 cloudMsg(double t, const std::string& frame, float x) {
   sensor_msgs::PointCloud2 c;
