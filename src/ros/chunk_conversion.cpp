@@ -2,8 +2,19 @@
 
 #include <cmath>
 
+#include "gmm_localization/core/map/map_format.h"
+
 namespace gmm_localization {
 namespace node {
+namespace {
+
+/// Bound on |first z bin| and |first z bin + stored bins| of any cell span, in any layer's z
+/// units: 2^24 bins are 168 km at 1 cm steps, far beyond kMaxMapHeightM, and keep every
+/// difference of a z bin and a span start (MapChunk::spanValue, the search's z loops) far
+/// inside int32.
+constexpr int64_t kMaxAbsZBin = int64_t{1} << 24;
+
+}  // namespace
 
 void toMsg(const MapChunk& chunk, uint64_t map_version, const std::string& frame_id,
            const ros::Time& stamp, RasterChunk& msg) {
@@ -65,11 +76,19 @@ Result<MapChunkConstPtr> fromMsg(const RasterChunk::ConstPtr& msg) {
         in.value_count > msg->values.size() - in.values_start) {
       return R::failure(which + " overruns the values array");
     }
-    // Every span must lie inside the layer's values, in increasing order.
+    // Every span must lie inside the layer's values, in increasing order, and its z bins within
+    // +-kMaxAbsZBin (checked in int64, before any int32 arithmetic on them).
     const uint32_t* spans = msg->spans.data() + in.spans_start;
     for (size_t i = 0; i + 1 < n_spans / 2; ++i) {
       if (spans[2 * i + 2] < spans[2 * i] || spans[2 * i + 2] > in.value_count) {
         return R::failure(which + " has an inconsistent span at cell " + std::to_string(i));
+      }
+      const int64_t first = static_cast<int32_t>(spans[2 * i + 1]);
+      const int64_t end = first + (int64_t{spans[2 * i + 2]} - int64_t{spans[2 * i]});
+      if (first < -kMaxAbsZBin || end > kMaxAbsZBin) {
+        return R::failure(which + " cell " + std::to_string(i) + " has z bins [" +
+                          std::to_string(first) + ", " + std::to_string(end) + ") outside +-" +
+                          std::to_string(kMaxAbsZBin));
       }
     }
     if (spans[0] != 0 || spans[n_spans - 2] != in.value_count) {
@@ -95,8 +114,11 @@ Result<MapChunkConstPtr> fromMsg(const RasterChunk::ConstPtr& msg) {
     for (int j = 0; j < k; ++j, c += 3) {
       if (c + 3 > msg->components.size()) return R::failure("components array too short");
       const GaussianComponent g{msg->components[c], msg->components[c + 1], msg->components[c + 2]};
-      if (!(g.weight > 0.f && g.weight <= 1.0001f && g.sigma_m > 0.f && std::isfinite(g.mean_m))) {
-        return R::failure("cell " + std::to_string(i) + " has an invalid component");
+      if (!(g.weight > 0.f && g.weight <= 1.0001f && g.sigma_m > 0.f &&
+            g.sigma_m <= kMaxComponentSigmaM && std::abs(g.mean_m) <= kMaxMapHeightM)) {
+        return R::failure("cell " + std::to_string(i) + " has an invalid component (weight " +
+                          std::to_string(g.weight) + ", mean " + std::to_string(g.mean_m) +
+                          " m, sigma " + std::to_string(g.sigma_m) + " m)");
       }
       mixtures[i].add(g);
     }

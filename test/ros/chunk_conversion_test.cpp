@@ -191,6 +191,34 @@ TEST(ChunkConversion, MalformedMessagesAreRejected) {
   expectRejected([](RasterChunk& m) { m.components.at(1) = NAN; }, "invalid component");
 }
 
+TEST(ChunkConversion, ExtremeIntegerAndComponentFieldsAreRejected) {
+  // A first z bin at the int32 extremes: (zb >> z_shift) - first would overflow.
+  for (uint32_t first : {0x80000000u, 0x7fffffffu, 0x80000001u, uint32_t{1} << 24}) {
+    expectRejected(
+        [first](RasterChunk& m) {
+          const size_t i = firstNonEmptyCell(m, 0);
+          m.spans[m.layers[0].spans_start + 2 * i + 1] = first;
+        },
+        "z bins");
+  }
+  // The same for a cell with an empty span (no values, but still a z bin start).
+  expectRejected([](RasterChunk& m) { m.spans[m.layers[2].spans_start + 1] = 0x80000000u; },
+                 "layer 2 cell 0 has z bins");
+  // Bins near (but within) the bound are accepted.
+  {
+    auto msg = boost::make_shared<RasterChunk>(*toMessage(*rasterized()));
+    const size_t i = firstNonEmptyCell(*msg, 0);
+    msg->spans[msg->layers[0].spans_start + 2 * i + 1] = static_cast<uint32_t>(-(1 << 23));
+    EXPECT_TRUE(fromMsg(msg).ok()) << fromMsg(msg).error();
+  }
+  // Components beyond the physical bounds of the map format.
+  expectRejected([](RasterChunk& m) { m.components.at(1) = 7e4f; }, "mean 70000");
+  expectRejected([](RasterChunk& m) { m.components.at(1) = -INFINITY; }, "invalid component");
+  expectRejected([](RasterChunk& m) { m.components.at(2) = INFINITY; }, "invalid component");
+  expectRejected([](RasterChunk& m) { m.components.at(2) = 5e3f; }, "sigma 5000");
+  expectRejected([](RasterChunk& m) { m.components.at(0) = NAN; }, "invalid component");
+}
+
 }  // namespace
 }  // namespace node
 }  // namespace gmm_localization

@@ -2,6 +2,9 @@
 // any delivery order, eviction by a newer index, map versions,.
 #include "gmm_localization/ros/map_server_client.h"
 
+#include <cmath>
+#include <cstdint>
+
 #include <gtest/gtest.h>
 #include <boost/make_shared.hpp>
 
@@ -127,6 +130,78 @@ TEST(MapServerClient, InvalidChunksAreRejected) {
   other_shift->shift = 5;  // 32 x 32 cells would need 4x the spans: fromMsg rejects it
   EXPECT_EQ(c.onChunk(other_shift, &why), V::kInvalid);
   EXPECT_EQ(c.chunks().size(), 0u);
+}
+
+/// A copy of a valid index after `mutate`.
+template <typename F>
+MapIndex::ConstPtr mutatedIndex(uint64_t version, double stamp_s, F mutate) {
+  auto index = boost::make_shared<MapIndex>(*indexMsg(version, stamp_s, {{0, 0}}));
+  mutate(*index);
+  return index;
+}
+
+TEST(MapServerClient, MalformedIndexNeverReplacesTheAdoptedOne) {
+  MapServerClient c;
+  ASSERT_EQ(c.onIndex(indexMsg(1, 1.0, {{0, 0}})), 0u);
+  ASSERT_EQ(c.onChunk(chunkMsg({0, 0}, 1, 2.0)), V::kAdded);
+  ASSERT_TRUE(c.complete());
+  // The reported case: a huge map_version with resolution 0.
+  std::string why;
+  EXPECT_EQ(
+      c.onIndex(mutatedIndex(~uint64_t{0}, 3.0, [](MapIndex& m) { m.resolution_m = 0.0; }), &why),
+      0u);
+  EXPECT_NE(why.find("rejected"), std::string::npos) << why;
+  EXPECT_NE(why.find("resolution_m"), std::string::npos) << why;
+  EXPECT_EQ(c.mapVersion(), 1u);
+  EXPECT_EQ(c.rejectedIndices(), 1u);
+  EXPECT_TRUE(c.complete());
+  EXPECT_EQ(c.chunks().size(), 1u);
+  EXPECT_EQ(c.chunks().geometry().resolution_m, 0.2);
+  // The real server keeps working: its chunks and its next index are accepted.
+  EXPECT_EQ(c.onChunk(chunkMsg({1, 0}, 1, 4.0)), V::kAdded);
+  EXPECT_EQ(c.onIndex(indexMsg(1, 5.0, {{0, 0}, {1, 0}}), &why), 0u);
+  EXPECT_TRUE(why.empty()) << why;
+  EXPECT_EQ(c.chunks().size(), 2u);
+  EXPECT_TRUE(c.complete());
+
+  // Each field checked (all with a newer version than the adopted one).
+  struct Case {
+    const char* what;
+    void (*mutate)(MapIndex&);
+  };
+  const Case cases[] = {
+      {"resolution_m", [](MapIndex& m) { m.resolution_m = 5e-4; }},
+      {"resolution_m", [](MapIndex& m) { m.resolution_m = std::nan(""); }},
+      {"resolution_m", [](MapIndex& m) { m.resolution_m = 1e6; }},
+      {"tile_size_cells", [](MapIndex& m) { m.tile_size_cells = 0; }},
+      {"tile_size_cells", [](MapIndex& m) { m.tile_size_cells = 1 << 30; }},
+      {"origin", [](MapIndex& m) { m.origin_x_m = INFINITY; }},
+      {"origin", [](MapIndex& m) { m.origin_y_m = 1e15; }},
+      {"num_layers", [](MapIndex& m) { m.num_layers = 1000; }},
+      {"num_layers", [](MapIndex& m) { m.num_layers = -1; }},
+      {"chunk_shift", [](MapIndex& m) { m.chunk_shift = 31; }},
+      {"z_step_m", [](MapIndex& m) { m.z_step_m = 0.0; }},
+      {"z_coarsening_period", [](MapIndex& m) { m.z_coarsening_period = -5; }},
+      {"ll_floor", [](MapIndex& m) { m.ll_floor = std::nan(""); }},
+      {"chunk_x lists", [](MapIndex& m) { m.chunk_y.push_back(3); }},
+      {"lies beyond", [](MapIndex& m) { m.chunk_x[0] = INT32_MAX; }},
+      {"lies beyond", [](MapIndex& m) { m.chunk_y[0] = INT32_MIN; }},
+      {"map extent", [](MapIndex& m) { m.max_x_m = std::nan(""); }},
+      {"map extent", [](MapIndex& m) { m.min_y_m = -1e12; }},
+      {"min > max", [](MapIndex& m) { m.min_x_m = 10.0; }},
+  };
+  size_t rejected = c.rejectedIndices();
+  for (const Case& k : cases) {
+    EXPECT_EQ(c.onIndex(mutatedIndex(2, 6.0, k.mutate), &why), 0u) << k.what;
+    EXPECT_NE(why.find(k.what), std::string::npos) << k.what << ": " << why;
+    EXPECT_EQ(c.rejectedIndices(), ++rejected) << k.what;
+    EXPECT_FALSE(validateIndex(*mutatedIndex(2, 6.0, k.mutate)).empty()) << k.what;
+  }
+  EXPECT_EQ(c.mapVersion(), 1u);
+  EXPECT_EQ(c.chunks().size(), 2u);
+  EXPECT_TRUE(validateIndex(*indexMsg(2, 6.0, {{-5, 7}})).empty());
+  EXPECT_EQ(c.onIndex(nullptr, &why), 0u);
+  EXPECT_FALSE(why.empty());
 }
 
 }  // namespace

@@ -18,7 +18,10 @@ namespace node {
 void toMsg(const MapChunk& chunk, uint64_t map_version, const std::string& frame_id,
            const ros::Time& stamp, RasterChunk& msg);
 
-/// Wraps a received chunk message. Fails, naming the problem, when its sizes are inconsistent.
+/// Wraps a received chunk message. Fails, naming the problem, when its sizes are inconsistent
+/// or any field is out of range: shift outside [4, 10], z_shift outside [0, 16], a span's z bins
+/// beyond +-2^24, a component beyond the map format's physical bounds (map_format.h). Every
+/// integer is range-checked before arithmetic, so no input causes signed overflow.
 Result<MapChunkConstPtr> fromMsg(const RasterChunk::ConstPtr& msg);
 
 }  // namespace node

@@ -14,6 +14,9 @@
 //    index listing it is on its way). Chunks of a newer version than the index wait for their
 //    index; chunks of an older version are ignored.
 // Chunks are wrapped with fromMsg (zero copy: they share the message's memory).
+// An index is validated before it is adopted (validateIndex): a malformed one (e.g. resolution 0,
+// layer counts the raster options reject, extents beyond the map format's physical bounds) is
+// rejected with a reason and never replaces the adopted index, whatever its map_version.
 
 #include <map>
 #include <string>
@@ -34,6 +37,14 @@ namespace node {
 MapGeometry geometryOf(const MapIndex& index);
 RasterOptions rasterOptionsOf(const MapIndex& index);
 
+/// Empty when `index` describes a usable map, else which field is wrong and why: the geometry
+/// within the map format's physical bounds (checkMapGeometryBounds: resolution in [0.05, 10] m,
+/// tile size in [8, 4096], finite bounded origin), valid raster options (RasterOptions::
+/// validate: chunk shift, layer counts, z step), as many chunk_x as chunk_y, every listed chunk
+/// and the map extent (finite, min <= max) within kMaxMapExtentM (plus one tile or chunk) of
+/// the map origin.
+std::string validateIndex(const MapIndex& index);
+
 class MapServerClient {
  public:
   enum class ChunkVerdict {
@@ -44,8 +55,12 @@ class MapServerClient {
 
   /// error (optional) receives the reason for kInvalid / kStale.
   ChunkVerdict onChunk(const RasterChunk::ConstPtr& msg, std::string* error = nullptr);
-  /// Adopts the index; returns the number of chunks dropped by it.
-  size_t onIndex(const MapIndex::ConstPtr& index);
+  /// Adopts the index unless it is invalid (validateIndex) or older than the adopted one;
+  /// returns the number of chunks dropped by it. error (optional) receives the reason when the
+  /// index is rejected as invalid (for a throttled warning), and is cleared otherwise.
+  size_t onIndex(const MapIndex::ConstPtr& index, std::string* error = nullptr);
+  /// Indices rejected as invalid so far.
+  size_t rejectedIndices() const { return rejected_indices_; }
 
   bool hasIndex() const { return index_ != nullptr; }
   const MapIndex::ConstPtr& index() const { return index_; }
@@ -63,6 +78,7 @@ class MapServerClient {
   bool matchesIndex(const RasterChunk& msg, std::string* error) const;
 
   MapIndex::ConstPtr index_;
+  size_t rejected_indices_ = 0;
   ChunkMap map_;
   std::map<ChunkId, Held> held_;
   /// Chunks whose version has no index yet: version -> id -> chunk.

@@ -24,7 +24,53 @@ bool safeFileName(const std::string& name) {
          name.find('\0') == std::string::npos;
 }
 
+std::string num(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
 }  // namespace
+
+std::string checkMapGeometryBounds(const MapGeometry& g) {
+  const std::string basic = g.validate();
+  if (!basic.empty()) return basic;
+  if (!(g.resolution_m >= kMinMapResolutionM && g.resolution_m <= kMaxMapResolutionM)) {
+    return "resolution_m=" + num(g.resolution_m) + " outside the physical range [" +
+           num(kMinMapResolutionM) + ", " + num(kMaxMapResolutionM) + "] m";
+  }
+  if (!(std::abs(g.origin_x_m) <= kMaxMapOriginM && std::abs(g.origin_y_m) <= kMaxMapOriginM)) {
+    return "origin (" + num(g.origin_x_m) + ", " + num(g.origin_y_m) + ") m beyond " +
+           num(kMaxMapOriginM) + " m";
+  }
+  return {};
+}
+
+std::string checkTileExtent(const MapGeometry& g, const TileId& id) {
+  // The farther corner of the tile from the origin, in metres (exact in double).
+  const double size_m = g.tileSizeM();
+  const double fx = std::max(std::abs(double(id.x)), std::abs(double(id.x) + 1.0)) * size_m;
+  const double fy = std::max(std::abs(double(id.y)), std::abs(double(id.y) + 1.0)) * size_m;
+  if (!(fx <= kMaxMapExtentM && fy <= kMaxMapExtentM)) {
+    return "tile (" + std::to_string(id.x) + ", " + std::to_string(id.y) + ") lies beyond " +
+           num(kMaxMapExtentM) + " m of the map origin";
+  }
+  return {};
+}
+
+std::string checkComponentBounds(const GaussianComponent& c) {
+  if (!(std::abs(c.mean_m) <= kMaxMapHeightM)) {
+    return "mean " + num(c.mean_m) + " m beyond the physical height range +-" +
+           num(kMaxMapHeightM) + " m";
+  }
+  if (!(c.sigma_m > 0.f && c.sigma_m <= kMaxComponentSigmaM)) {
+    return "sigma " + num(c.sigma_m) + " m outside (0, " + num(kMaxComponentSigmaM) + "] m";
+  }
+  if (!(c.weight > 0.f && c.weight <= 1.f)) {
+    return "weight " + num(c.weight) + " outside (0, 1]";
+  }
+  return {};
+}
 
 std::vector<uint8_t> encodeManifest(const MapManifest& m) {
   std::vector<uint8_t> out;
@@ -103,7 +149,7 @@ Result<MapManifest> decodeManifest(const uint8_t* data, size_t size, const std::
   const uint32_t n_tiles = body.u32("tile count");
   if (!body.ok()) return fail(body.error());
   if (flags != 0) return fail("unknown flags " + std::to_string(flags));
-  const std::string geometry_error = m.geometry.validate();
+  const std::string geometry_error = checkMapGeometryBounds(m.geometry);
   if (!geometry_error.empty()) return fail("invalid geometry: " + geometry_error);
   // Each tile entry takes at least 48 bytes: refuse a count the file cannot hold.
   if (n_tiles > kMaxTiles || uint64_t{n_tiles} * 48 > body.remaining()) {
@@ -128,8 +174,15 @@ Result<MapManifest> decodeManifest(const uint8_t* data, size_t size, const std::
         "tile (" + std::to_string(t.id.x) + ", " + std::to_string(t.id.y) + ")";
     if (!safeFileName(t.file_name)) return fail(which + ": unsafe file name '" + t.file_name + "'");
     if (!seen.insert(t.id).second) return fail(which + " is listed twice");
+    const std::string extent_error = checkTileExtent(m.geometry, t.id);
+    if (!extent_error.empty()) return fail("invalid extent: " + extent_error);
+    constexpr double kMaxZ = kMaxMapHeightM + 4.0 * kMaxComponentSigmaM;
     if (!std::isfinite(t.z_min_m) || !std::isfinite(t.z_max_m) || t.z_min_m > t.z_max_m) {
       return fail(which + ": invalid z range");
+    }
+    if (!(std::abs(t.z_min_m) <= kMaxZ && std::abs(t.z_max_m) <= kMaxZ)) {
+      return fail(which + ": z range [" + num(t.z_min_m) + ", " + num(t.z_max_m) +
+                  "] m beyond the physical height range +-" + num(kMaxZ) + " m");
     }
     if (sum != cells) {
       return fail("inconsistent sizes: " + which + " cell counts sum to " + std::to_string(sum) +

@@ -85,12 +85,17 @@ Result<EncodedTile> encodeTile(const GmmTile& tile, const TileCodecOptions& opti
     const GaussianMixture1D& g = cells[i];
     for (int j = 0; j < g.size(); ++j) {
       const GaussianComponent& c = g.component(j);
-      if (!std::isfinite(c.mean_m) || std::abs(c.mean_m) > 1e9f) {
+      if (!std::isfinite(c.mean_m)) {
         return R::failure("cannot encode " + cellName(tile, i) + ": mean is not finite");
       }
-      if (!(c.sigma_m >= 1e-4f && c.sigma_m <= 1e4f)) {
+      if (std::abs(c.mean_m) > kMaxMapHeightM) {
+        return R::failure("cannot encode " + cellName(tile, i) + ": mean " +
+                          std::to_string(c.mean_m) + " m beyond the physical height range");
+      }
+      if (!(c.sigma_m >= 1e-4f && c.sigma_m <= kMaxComponentSigmaM)) {
         return R::failure("cannot encode " + cellName(tile, i) + ": sigma " +
-                          std::to_string(c.sigma_m) + " m outside [1e-4, 1e4]");
+                          std::to_string(c.sigma_m) + " m outside [1e-4, " +
+                          std::to_string(kMaxComponentSigmaM) + "]");
       }
       if (g.size() >= 2 && !(c.weight >= std::ldexp(1.f, -20) && c.weight <= 1.f)) {
         return R::failure("cannot encode " + cellName(tile, i) + ": weight " +
@@ -313,8 +318,10 @@ Result<std::shared_ptr<GmmTile>> decodeTile(const uint8_t* data, size_t size,
       c.mean_m = static_cast<float>(base + quantum * planes[j][next[j]++]);
       c.sigma_m = static_cast<float>(sigmaValue(planes[kSlots + j][next[kSlots + j]++]));
       c.weight = static_cast<float>(w[j] / wsum);
-      if (!std::isfinite(c.mean_m) || !(c.sigma_m > 0.f) || !std::isfinite(c.sigma_m)) {
-        return fail("invalid decoded value in cell " + std::to_string(i));
+      const std::string bad = checkComponentBounds(c);
+      if (!bad.empty()) {
+        return fail("invalid value in " + cellName(*tile, i) + ", component " + std::to_string(j) +
+                    ": " + bad);
       }
       out[i].add(c);
     }

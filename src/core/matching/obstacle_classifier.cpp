@@ -1,5 +1,6 @@
 #include "gmm_localization/core/matching/obstacle_classifier.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -7,29 +8,75 @@
 
 namespace gmm_localization {
 
+namespace {
+
+/// Map-frame |x|, |y| beyond which a pose is not used [m].
+constexpr double kMaxPoseOffsetM = 1e7;
+/// Pose cell index bound: keeps every cell index of the window far inside int64 and its chunk
+/// ids inside int32.
+constexpr double kMaxPoseCells = 1e9;
+/// Bound on the chunk pointers of the lookup window (8 MB); only a geometry with cells far
+/// below the manifest's minimum resolution could reach it.
+constexpr int64_t kMaxWindowChunks = int64_t{1} << 20;
+
+double effectiveRange(const ObstacleOptions& options) {
+  const double r = options.max_range_m;
+  if (!std::isfinite(r)) return kMaxObstacleRangeM;
+  return std::min(std::max(r, 1.0), kMaxObstacleRangeM);
+}
+
+bool poseUsable(const MapGeometry& g, const Pose6& pose) {
+  const double v[] = {pose.x, pose.y, pose.z, pose.roll, pose.pitch, pose.yaw};
+  for (double x : v) {
+    if (!std::isfinite(x)) return false;
+  }
+  const double cells_x = std::abs(pose.x - g.origin_x_m) / g.resolution_m;
+  const double cells_y = std::abs(pose.y - g.origin_y_m) / g.resolution_m;
+  return std::abs(pose.x) <= kMaxPoseOffsetM && std::abs(pose.y) <= kMaxPoseOffsetM &&
+         cells_x < kMaxPoseCells && cells_y < kMaxPoseCells;
+}
+
+}  // namespace
+
 ObstacleLabels classifyObstacles(const ChunkMap& map, const PointList& base_points,
                                  const Pose6& pose, const ObstacleOptions& options) {
   ObstacleLabels out;
-  out.label.assign(base_points.size(), PointClass::kObstacle);
+  out.label.assign(base_points.size(), PointClass::kUnknown);
   out.mahalanobis.assign(base_points.size(), std::numeric_limits<float>::infinity());
   if (base_points.empty()) return out;
-  // Cells under the points: a dense chunk grid over the scan's extent.
+  const MapGeometry& g = map.geometry();
+  if (!g.validate().empty() || !poseUsable(g, pose)) {
+    out.unclassified = base_points.size();
+    return out;
+  }
+  const double max_range = effectiveRange(options);
+  auto inRange = [&](const Eigen::Vector3f& q) {
+    return q.allFinite() && q.cast<double>().norm() <= max_range;
+  };
+  // Cells under the classified points: a dense chunk grid over their extent (bounded by
+  // max_range, so by the sensor, not by the input).
   const Eigen::Isometry3d T = toIsometry(pose);
   double r = 0.0;
   for (const Eigen::Vector3f& p : base_points) {
-    if (p.allFinite()) r = std::max<double>(r, p.head<2>().norm());
+    if (inRange(p)) r = std::max<double>(r, p.cast<double>().norm());
   }
-  const CellIndex lo = map.geometry().cellAt(pose.x - r - 1.0, pose.y - r - 1.0);
-  const CellIndex hi = map.geometry().cellAt(pose.x + r + 1.0, pose.y + r + 1.0);
+  const CellIndex lo = g.cellAt(pose.x - r - 1.0, pose.y - r - 1.0);
+  const CellIndex hi = g.cellAt(pose.x + r + 1.0, pose.y + r + 1.0);
+  const int shift = map.options().chunk_shift;
+  if (((hi.x >> shift) - (lo.x >> shift) + 1) * ((hi.y >> shift) - (lo.y >> shift) + 1) >
+      kMaxWindowChunks) {
+    out.unclassified = base_points.size();
+    return out;
+  }
   const RasterWindow window(map, lo.x, lo.y, hi.x, hi.y);
   for (size_t i = 0; i < base_points.size(); ++i) {
     const Eigen::Vector3f& q = base_points[i];
-    if (!q.allFinite()) {
-      ++out.obstacles;
+    if (!inRange(q)) {
+      ++out.unclassified;
       continue;
     }
     const Eigen::Vector3d p = T * q.cast<double>();
-    const CellIndex c = map.geometry().cellAt(p.x(), p.y());
+    const CellIndex c = g.cellAt(p.x(), p.y());
     const MapChunk* chunk = window.chunk(c.x, c.y);
     double d = std::numeric_limits<double>::infinity();
     if (chunk != nullptr && chunk->hasMixtures()) {
@@ -41,6 +88,7 @@ ObstacleLabels classifyObstacles(const ChunkMap& map, const PointList& base_poin
     if (d <= options.mahalanobis_threshold) {
       out.label[i] = PointClass::kMap;
     } else {
+      out.label[i] = PointClass::kObstacle;
       ++out.obstacles;
       if (!std::isfinite(d)) ++out.over_empty_cells;
     }

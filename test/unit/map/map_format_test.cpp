@@ -6,7 +6,9 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <random>
 
@@ -400,6 +402,96 @@ TEST(MapFormat, FailedAtomicWriteLeavesNoPartialFile) {
   const Status s2 = writeFileAtomic(dir.path + "/nope/x.bin", old_bytes);
   ASSERT_FALSE(s2.ok());
   EXPECT_NE(s2.error().find("nope/x.bin"), std::string::npos);
+}
+
+// --- physical bounds on top of the CRC ---
+
+void putF64(std::vector<uint8_t>& b, size_t at, double v) {
+  uint64_t u;
+  std::memcpy(&u, &v, 8);
+  for (int i = 0; i < 8; ++i) b[at + i] = static_cast<uint8_t>(u >> (8 * i));
+}
+
+TEST(MapFormat, ManifestRejectsGeometryOutsidePhysicalBounds) {
+  for (double res : {5e-4, 0.049, 10.5}) {
+    MapManifest m = sampleManifest();
+    m.geometry.resolution_m = res;
+    const auto b = encodeManifest(m);
+    auto r = decodeManifest(b.data(), b.size(), "m.gmm");
+    ASSERT_FALSE(r.ok()) << res;
+    EXPECT_NE(r.error().find("resolution_m"), std::string::npos) << r.error();
+    EXPECT_NE(r.error().find("manifest 'm.gmm'"), std::string::npos) << r.error();
+  }
+  for (double res : {0.05, 0.2, 10.0}) {
+    MapManifest m = sampleManifest();
+    m.geometry.resolution_m = res;
+    const auto b = encodeManifest(m);
+    EXPECT_TRUE(decodeManifest(b.data(), b.size(), "m.gmm").ok()) << res;
+  }
+  MapManifest m = sampleManifest();
+  m.geometry.origin_x_m = 1e12;
+  auto b = encodeManifest(m);
+  EXPECT_NE(decodeManifest(b.data(), b.size(), "m").error().find("origin"), std::string::npos);
+  // Tile (2e6, 0) of 16 cells of 0.2 m lies 6400 km from the origin.
+  m = sampleManifest();
+  m.tiles[1].id = {2000000, 0};
+  m.tiles[1].file_name = tileFileName(m.tiles[1].id);
+  b = encodeManifest(m);
+  auto r = decodeManifest(b.data(), b.size(), "m");
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().find("tile (2000000, 0) lies beyond"), std::string::npos) << r.error();
+  m = sampleManifest();
+  m.tiles[2].z_max_m = 7e4f;
+  b = encodeManifest(m);
+  r = decodeManifest(b.data(), b.size(), "m");
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().find("tile (2, -2): z range"), std::string::npos) << r.error();
+}
+
+TEST(MapFormat, DecoderRejectsCrcCorrectTileWithAbsurdComponents) {
+  TileCodecOptions o;
+  o.deflate = false;
+  GmmTile t({4, -1}, 8);
+  t.at(3, 0).add({1.f, 13.f, 0.05f});
+  auto enc = encodeTile(t, o);
+  ASSERT_TRUE(enc.ok()) << enc.error();
+  ASSERT_TRUE(decodeTile(enc->bytes.data(), enc->bytes.size(), "victim.gmt").ok());
+  // Base height (offset 24) moved to 70 km: every mean decodes there.
+  auto b = enc->bytes;
+  putF64(b, 24, 7e4);
+  refreshCrc(b);
+  auto r = decodeTile(b.data(), b.size(), "victim.gmt");
+  expectFailureNaming(r, "cell (3, 0) of tile (4, -1), component 0: mean 70000");
+  // Sigma code (raw payload: 16 bytes of K, 2 of mean codes, then the sigma plane) at its
+  // maximum: 1e4 m.
+  b = enc->bytes;
+  b[48 + 18] = 0xff;
+  b[48 + 19] = 0xff;
+  refreshCrc(b);
+  expectFailureNaming(decodeTile(b.data(), b.size(), "victim.gmt"), "component 0: sigma 10000");
+  // The encoder refuses what the decoder would reject.
+  t.at(3, 0).clear();
+  t.at(3, 0).add({1.f, 2e4f, 0.05f});
+  auto e = encodeTile(t);
+  ASSERT_FALSE(e.ok());
+  EXPECT_NE(e.error().find("physical height range"), std::string::npos) << e.error();
+  t.at(3, 0).clear();
+  t.at(3, 0).add({1.f, 0.f, 2e3f});
+  EXPECT_FALSE(encodeTile(t).ok());
+}
+
+TEST(MapFormat, TileExtentAndComponentBoundsHelpers) {
+  MapGeometry g;  // 0.2 m, 320 cells: 64 m tiles
+  EXPECT_TRUE(checkTileExtent(g, {15623, -15624}).empty());
+  EXPECT_FALSE(checkTileExtent(g, {15625, 0}).empty());
+  EXPECT_FALSE(checkTileExtent(g, {0, -15626}).empty());
+  EXPECT_FALSE(checkTileExtent(g, {INT32_MIN, INT32_MAX}).empty());
+  EXPECT_TRUE(checkComponentBounds({0.5f, -400.f, 0.03f}).empty());
+  EXPECT_FALSE(checkComponentBounds({0.5f, NAN, 0.03f}).empty());
+  EXPECT_FALSE(checkComponentBounds({0.5f, 0.f, 0.f}).empty());
+  EXPECT_FALSE(checkComponentBounds({0.5f, 0.f, INFINITY}).empty());
+  EXPECT_FALSE(checkComponentBounds({-0.5f, 0.f, 1.f}).empty());
+  EXPECT_FALSE(checkComponentBounds({NAN, 0.f, 1.f}).empty());
 }
 
 }  // namespace

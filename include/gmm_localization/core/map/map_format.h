@@ -43,6 +43,14 @@
 // Failure behaviour: decoders and readers return a failure whose reason names the file and the
 // problem (missing, truncated, CRC mismatch, wrong magic, unsupported version, inconsistent
 // sizes, invalid value). They never crash and never return a partly decoded map.
+//
+// Physical bounds (checked by the readers on top of the CRC, so that a CRC-correct but absurd
+// file cannot make the map server or the rasterizer do unbounded work): resolution in
+// [kMinMapResolutionM, kMaxMapResolutionM]; origin within kMaxMapOriginM of the frame's origin;
+// every tile within kMaxMapExtentM of the map origin; every component mean within
+// kMaxMapHeightM of z = 0, sigma in (0, kMaxComponentSigmaM], weight finite in (0, 1]; a
+// manifest's tile z range within kMaxMapHeightM + 4 kMaxComponentSigmaM. Maps built by
+// build_map (0.2 m cells, real-world heights) are far inside all of them.
 
 #include <array>
 #include <cstdint>
@@ -58,6 +66,22 @@ namespace gmm_localization {
 
 constexpr uint16_t kMapFormatVersion = 1;
 constexpr const char* kManifestFileName = "manifest.gmm";
+
+constexpr double kMinMapResolutionM = 0.05;  ///< smallest accepted cell edge [m]
+constexpr double kMaxMapResolutionM = 10.0;  ///< largest accepted cell edge [m]
+constexpr double kMaxMapOriginM = 1e8;       ///< bound on |origin_x_m|, |origin_y_m| [m]
+constexpr double kMaxMapExtentM = 1e6;       ///< bound on a tile's distance from the origin [m]
+constexpr double kMaxMapHeightM = 1e4;       ///< bound on |component mean| [m]
+constexpr double kMaxComponentSigmaM = 1e3;  ///< bound on a component's sigma [m]
+
+/// Empty when `g` passes MapGeometry::validate() and the physical bounds above (resolution,
+/// origin), else which field is wrong and why.
+std::string checkMapGeometryBounds(const MapGeometry& g);
+/// Empty when tile `id` of `g` lies within kMaxMapExtentM of the map origin (so cell and chunk
+/// indices, and the number of chunks between any two tiles, stay bounded), else why.
+std::string checkTileExtent(const MapGeometry& g, const TileId& id);
+/// Empty when a component is within the physical bounds above, else which field is wrong.
+std::string checkComponentBounds(const GaussianComponent& c);
 
 /// The manifest's entry for one tile file.
 struct TileInfo {
@@ -111,12 +135,14 @@ std::string tileFileName(const TileId& id);
 /// The manifest entry's z range and component counts of a tile (file fields left empty).
 TileInfo summarizeTile(const GmmTile& tile);
 
-/// Encodes a tile. Fails (naming the cell) on a non-finite mean, a sigma outside [1e-4, 1e4] m,
-/// a weight outside [2^-20, 1], or a tile size outside [8, 4096].
+/// Encodes a tile. Fails (naming the cell) on a non-finite mean or one beyond kMaxMapHeightM, a
+/// sigma outside [1e-4, kMaxComponentSigmaM] m, a weight outside [2^-20, 1], or a tile size
+/// outside [8, 4096].
 Result<EncodedTile> encodeTile(const GmmTile& tile, const TileCodecOptions& options = {});
 
 /// Decodes tile bytes; `source` names the file in error messages. When `expected` is non-null
-/// the tile's id and size must match it (tile_size_cells), else it fails.
+/// the tile's id and size must match it (tile_size_cells), else it fails. Fails, naming the
+/// tile, the cell and the field, on a decoded component outside the physical bounds above.
 Result<std::shared_ptr<GmmTile>> decodeTile(const uint8_t* data, size_t size,
                                             const std::string& source,
                                             const TileId* expected_id = nullptr,

@@ -44,9 +44,12 @@ class MapChunk {
   ChunkId id() const { return id_; }
   int shift() const { return shift_; }
   int cells() const { return 1 << shift_; }
-  /// First global cell of this chunk.
+  /// First global cell of this chunk: id * 2^shift, exact for every int32 id (a multiplication:
+  /// left-shifting a negative id would be undefined behaviour).
   CellIndex origin() const {
-    return {static_cast<int64_t>(id_.x) << shift_, static_cast<int64_t>(id_.y) << shift_};
+    const int64_t cells_per_chunk = int64_t{1} << shift_;
+    return {static_cast<int64_t>(id_.x) * cells_per_chunk,
+            static_cast<int64_t>(id_.y) * cells_per_chunk};
   }
 
   int numLayers() const { return static_cast<int>(layers_.size()); }
