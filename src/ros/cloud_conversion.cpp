@@ -1,6 +1,9 @@
 #include "gmm_localization/ros/cloud_conversion.h"
 
+#include <cmath>
 #include <cstring>
+#include <limits>
+#include <sstream>
 
 namespace gmm_localization {
 namespace node {
@@ -76,9 +79,26 @@ std::string checkField(const PointField* f, uint32_t point_step) {
   return {};
 }
 
+/// double -> float without undefined behaviour: values beyond the float range become +-inf (as
+/// non-finite points they are then dropped downstream), NaN stays NaN.
+float toFloat(double v) {
+  constexpr double kMax = std::numeric_limits<float>::max();
+  if (v > kMax) return std::numeric_limits<float>::infinity();
+  if (v < -kMax) return -std::numeric_limits<float>::infinity();
+  return static_cast<float>(v);
+}
+
+/// Empty when v (any numeric datatype read as double) is finite and in [0, max], else why.
+std::string checkIntegerValue(const char* name, double v, double max, size_t point) {
+  if (std::isfinite(v) && v >= 0.0 && v <= max) return {};
+  std::ostringstream s;
+  s << "field '" << name << "' of point " << point << " is " << v << ": not in [0, " << max << "]";
+  return s.str();
+}
+
 }  // namespace
 
-Result<CloudData> fromCloudMsg(const sensor_msgs::PointCloud2& msg) {
+Result<CloudData> fromMsg(const sensor_msgs::PointCloud2& msg) {
   using R = Result<CloudData>;
   if (msg.is_bigendian) return R::failure("big-endian clouds are not supported");
   const uint64_t n = static_cast<uint64_t>(msg.width) * msg.height;
@@ -127,21 +147,32 @@ Result<CloudData> fromCloudMsg(const sensor_msgs::PointCloud2& msg) {
     const uint8_t* base = msg.data.data() + static_cast<size_t>(row) * msg.row_step;
     for (uint32_t col = 0; col < msg.width; ++col, ++i) {
       const uint8_t* p = base + static_cast<size_t>(col) * msg.point_step;
-      out.points[i] = Eigen::Vector3f(static_cast<float>(readNumber(p + fx->offset, fx->datatype)),
-                                      static_cast<float>(readNumber(p + fy->offset, fy->datatype)),
-                                      static_cast<float>(readNumber(p + fz->offset, fz->datatype)));
-      if (ft)
-        out.time_s[i] = static_cast<float>(readNumber(p + ft->offset, ft->datatype) * time_scale);
-      if (fi) out.intensity[i] = static_cast<float>(readNumber(p + fi->offset, fi->datatype));
-      if (fr) out.ring[i] = static_cast<uint16_t>(readNumber(p + fr->offset, fr->datatype));
-      if (fl) out.label[i] = static_cast<uint8_t>(readNumber(p + fl->offset, fl->datatype));
+      out.points[i] = Eigen::Vector3f(toFloat(readNumber(p + fx->offset, fx->datatype)),
+                                      toFloat(readNumber(p + fy->offset, fy->datatype)),
+                                      toFloat(readNumber(p + fz->offset, fz->datatype)));
+      if (ft) out.time_s[i] = toFloat(readNumber(p + ft->offset, ft->datatype) * time_scale);
+      if (fi) out.intensity[i] = toFloat(readNumber(p + fi->offset, fi->datatype));
+      // Integer fields of any datatype: checked before the cast (a float -> integer cast of a
+      // value out of range is undefined behaviour); fractions are truncated towards zero.
+      if (fr) {
+        const double v = readNumber(p + fr->offset, fr->datatype);
+        const std::string e = checkIntegerValue("ring", v, 65535.0, i);
+        if (!e.empty()) return R::failure(e);
+        out.ring[i] = static_cast<uint16_t>(v);
+      }
+      if (fl) {
+        const double v = readNumber(p + fl->offset, fl->datatype);
+        const std::string e = checkIntegerValue("label", v, 255.0, i);
+        if (!e.empty()) return R::failure(e);
+        out.label[i] = static_cast<uint8_t>(v);
+      }
     }
   }
   return out;
 }
 
-void toCloudMsg(const CloudData& cloud, sensor_msgs::PointCloud2& msg,
-                const std::string& extra_float_name, const std::vector<float>& extra_float) {
+void toMsg(const CloudData& cloud, sensor_msgs::PointCloud2& msg,
+           const std::string& extra_float_name, const std::vector<float>& extra_float) {
   const size_t n = cloud.points.size();
   msg.fields.clear();
   uint32_t offset = 0;

@@ -20,7 +20,7 @@ CloudMerger::CloudMerger(ros::NodeHandle nh, ros::NodeHandle pnh, const std::str
     : nh_(nh),
       pnh_(pnh),
       name_(name),
-      options_(loadCloudMergerOptions(pnh)),
+      options_(loadNodeletOptions(pnh, name, loadCloudMergerOptions)),
       sync_(options_.sync),
       output_rate_(0.5 * options_.expected_rate_hz, 1.5 * options_.expected_rate_hz) {
   for (const std::string& topic : options_.input_topics) {
@@ -71,7 +71,7 @@ bool CloudMerger::extrinsic(Input& input, const std::string& frame, Eigen::Isome
   std::string error;
   try {
     const auto t = tf_buffer_.lookupTransform(options_.output_frame, frame, ros::Time(0));
-    T = fromTransformMsg(t.transform);
+    T = fromMsg(t.transform);
     if (T.matrix().allFinite()) {
       input.extrinsic = T;
       input.extrinsic_frame = frame;
@@ -97,7 +97,7 @@ void CloudMerger::onCloud(const sensor_msgs::PointCloud2::ConstPtr& msg, size_t 
   const double arrival_s = wallNow();
   Input& input = *inputs_[sensor];
   input.rate.tick();
-  auto data = fromCloudMsg(*msg);
+  auto data = fromMsg(*msg);
   std::lock_guard<std::mutex> lock(mutex_);
   ++input.received;
   input.frame = msg->header.frame_id;
@@ -151,7 +151,7 @@ void CloudMerger::publish(const MergeCycle& cycle) {
   // Called with mutex_ held.
   const CloudData merged = mergeCycle(cycle);
   auto msg = boost::make_shared<sensor_msgs::PointCloud2>();
-  toCloudMsg(merged, *msg);
+  toMsg(merged, *msg);
   msg->header.stamp.fromNSec(static_cast<uint64_t>(cycle.stamp_ns));
   msg->header.frame_id = options_.output_frame;
   msg->is_dense = true;  // non-finite points were dropped

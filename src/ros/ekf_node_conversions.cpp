@@ -88,7 +88,7 @@ TwistMeasurement twistFromOdometryMsg(const nav_msgs::Odometry& msg) {
 OdometrySample odometrySampleFromMsg(const nav_msgs::Odometry& msg) {
   OdometrySample s;
   s.stamp_s = msg.header.stamp.toSec();
-  s.odom_T_base = fromPoseMsg(msg.pose.pose);
+  s.odom_T_base = fromMsg(msg.pose.pose);
   s.linear_mps = vec(msg.twist.twist.linear);
   s.angular_radps = vec(msg.twist.twist.angular);
   return s;
@@ -97,7 +97,7 @@ OdometrySample odometrySampleFromMsg(const nav_msgs::Odometry& msg) {
 PosteriorEstimate posteriorFromOdometryMsg(const nav_msgs::Odometry& msg) {
   PosteriorEstimate p;
   p.stamp_s = msg.header.stamp.toSec();
-  p.map_T_base = fromPoseMsg(msg.pose.pose);
+  p.map_T_base = fromMsg(msg.pose.pose);
   p.covariance = covarianceFromMsg(msg.pose.covariance);
   p.twist.linear_mps = vec(msg.twist.twist.linear);
   p.twist.angular_radps = vec(msg.twist.twist.angular);
@@ -109,7 +109,7 @@ bool odometryMsgFromState(const EkfState& s, const std::string& map_frame,
   if (!s.x.allFinite() || !s.P.allFinite()) return false;
   msg.header.frame_id = map_frame;
   msg.child_frame_id = base_frame;
-  msg.pose.pose = toPoseMsg(s.pose());
+  msg.pose.pose = node::toMsg(s.pose());
   covarianceToMsg(s.poseCovariance(), msg.pose.covariance);
   setVec(s.linearVelocity(), msg.twist.twist.linear);
   setVec(s.angularVelocity(), msg.twist.twist.angular);
@@ -122,7 +122,7 @@ Result<PoseWithCovariance6> poseFromMsg(const geometry_msgs::PoseWithCovarianceS
   if (!isFinite(msg.pose.pose)) return R::failure("pose has a non-finite value or zero quaternion");
   PoseWithCovariance6 out;
   out.stamp_s = msg.header.stamp.toSec();
-  out.pose = toPose6(fromPoseMsg(msg.pose.pose));
+  out.pose = fromIsometry(fromMsg(msg.pose.pose));
   out.covariance = covarianceFromMsg(msg.pose.covariance);
   if (!out.covariance.allFinite()) return R::failure("pose covariance has a non-finite value");
   return out;
@@ -136,7 +136,7 @@ Result<PoseWithCovariance6> initialPoseInMap(const geometry_msgs::PoseWithCovari
     try {
       const auto t =
           tf.lookupTransform(map_frame, msg.header.frame_id, ros::Time(0), ros::Duration(0.1));
-      in_map.pose.pose = toPoseMsg(tf2::transformToEigen(t) * fromPoseMsg(msg.pose.pose));
+      in_map.pose.pose = node::toMsg(tf2::transformToEigen(t) * fromMsg(msg.pose.pose));
     } catch (const tf2::TransformException& e) {
       return Result<PoseWithCovariance6>::failure("in frame '" + msg.header.frame_id +
                                                   "': " + e.what());

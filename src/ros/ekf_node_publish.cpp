@@ -90,7 +90,7 @@ void EkfNode::onTimer(const ros::TimerEvent&) {
   tf.header.stamp = stamp;
   tf.header.frame_id = options_.map_frame;
   tf.child_frame_id = options_.odom_frame;
-  tf.transform = toTransformMsg(*map_T_odom);
+  toMsg(*map_T_odom, tf.transform);
   tf_broadcaster_.sendTransform(tf);
 }
 

@@ -138,7 +138,7 @@ void MapServer::publishMapCloud(const std::vector<PlanCentre>& centres) {
   buildMapCloud(engine_->held(), engine_->store()->geometry(), centres, options_.map_cloud_radius_m,
                 cloud, sigma);
   auto msg = boost::make_shared<sensor_msgs::PointCloud2>();
-  toCloudMsg(cloud, *msg, "sigma", sigma);
+  toMsg(cloud, *msg, "sigma", sigma);
   msg->header.frame_id = options_.map_frame;
   msg->header.stamp = ros::Time::now();
   msg->is_dense = true;

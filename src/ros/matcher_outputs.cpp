@@ -73,14 +73,14 @@ void toStatusMsg(const MatchReport& r, const std::string& map_frame, double late
     }
     msg.pose.covariance.fill(0.0);
   }
-  msg.pose.pose = toPoseMsg(fromPose6(shown));
+  msg.pose.pose = toMsg(shown);
 }
 
 bool toMatchPoseMsg(const MatchReport& r, const std::string& map_frame,
                     geometry_msgs::PoseWithCovarianceStamped& msg) {
   if (!r.accepted() || !finite(r.pose) || !r.covariance.allFinite()) return false;
   msg.header.frame_id = map_frame;
-  msg.pose.pose = toPoseMsg(fromPose6(r.pose));
+  msg.pose.pose = toMsg(r.pose);
   fillCovariance(r.covariance, msg.pose.covariance);
   return isFinite(msg.pose.pose);
 }

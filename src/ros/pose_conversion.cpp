@@ -7,7 +7,7 @@
 namespace gmm_localization {
 namespace node {
 
-geometry_msgs::Pose toPoseMsg(const Eigen::Isometry3d& T) {
+geometry_msgs::Pose toMsg(const Eigen::Isometry3d& T) {
   geometry_msgs::Pose p;
   p.position.x = T.translation().x();
   p.position.y = T.translation().y();
@@ -20,7 +20,7 @@ geometry_msgs::Pose toPoseMsg(const Eigen::Isometry3d& T) {
   return p;
 }
 
-Eigen::Isometry3d fromPoseMsg(const geometry_msgs::Pose& p) {
+Eigen::Isometry3d fromMsg(const geometry_msgs::Pose& p) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.translation() = Eigen::Vector3d(p.position.x, p.position.y, p.position.z);
   Eigen::Quaterniond q(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z);
@@ -28,7 +28,7 @@ Eigen::Isometry3d fromPoseMsg(const geometry_msgs::Pose& p) {
   return T;
 }
 
-Eigen::Isometry3d fromTransformMsg(const geometry_msgs::Transform& t) {
+Eigen::Isometry3d fromMsg(const geometry_msgs::Transform& t) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.translation() = Eigen::Vector3d(t.translation.x, t.translation.y, t.translation.z);
   Eigen::Quaterniond q(t.rotation.w, t.rotation.x, t.rotation.y, t.rotation.z);
@@ -36,18 +36,15 @@ Eigen::Isometry3d fromTransformMsg(const geometry_msgs::Transform& t) {
   return T;
 }
 
-geometry_msgs::Transform toTransformMsg(const Eigen::Isometry3d& T) {
-  const geometry_msgs::Pose p = toPoseMsg(T);
-  geometry_msgs::Transform t;
-  t.translation.x = p.position.x;
-  t.translation.y = p.position.y;
-  t.translation.z = p.position.z;
-  t.rotation = p.orientation;
-  return t;
+void toMsg(const Eigen::Isometry3d& T, geometry_msgs::Transform& msg) {
+  const geometry_msgs::Pose p = toMsg(T);
+  msg.translation.x = p.position.x;
+  msg.translation.y = p.position.y;
+  msg.translation.z = p.position.z;
+  msg.rotation = p.orientation;
 }
 
-Pose6 toPose6(const Eigen::Isometry3d& T) { return fromIsometry(T); }
-Eigen::Isometry3d fromPose6(const Pose6& p) { return toIsometry(p); }
+geometry_msgs::Pose toMsg(const Pose6& p) { return toMsg(toIsometry(p)); }
 
 bool isFinite(const geometry_msgs::Pose& p) {
   const double q2 = p.orientation.x * p.orientation.x + p.orientation.y * p.orientation.y +

@@ -47,7 +47,7 @@ sensor_msgs::PointCloud2 sensorCloud(int i, const ros::Time& stamp) {
   }
   c.points[3].x() = NAN;
   sensor_msgs::PointCloud2 msg;
-  toCloudMsg(c, msg);
+  toMsg(c, msg);
   msg.header.stamp = stamp;
   msg.header.frame_id = "velodyne_" + std::to_string(i);
   return msg;
@@ -63,7 +63,7 @@ class CloudMergerRostest : public ::testing::Test {
       t.header.stamp = ros::Time::now();
       t.header.frame_id = "base_link";
       t.child_frame_id = "velodyne_" + std::to_string(i);
-      t.transform = toTransformMsg(extrinsic(i));
+      toMsg(extrinsic(i), t.transform);
       tfs_.push_back(t);
     }
     tf_.sendTransform(tfs_);
@@ -165,7 +165,7 @@ TEST_F(CloudMergerRostest, MergesIntoBaseLinkAndSurvivesBadInput) {
   EXPECT_EQ(m->header.frame_id, "base_link");
   EXPECT_EQ(m->header.stamp, t) << "stamped with the earliest input";
   EXPECT_TRUE(m->is_dense);
-  auto cloud = fromCloudMsg(*m);
+  auto cloud = fromMsg(*m);
   ASSERT_TRUE(cloud.ok()) << cloud.error();
   ASSERT_EQ(cloud->points.size(), static_cast<size_t>(kSensors * 9)) << "NaN points dropped";
   ASSERT_EQ(cloud->time_s.size(), cloud->points.size());

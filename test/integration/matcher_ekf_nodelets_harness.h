@@ -177,7 +177,7 @@ class Harness {
       cloud.time_s.push_back(0.1f * static_cast<float>(i) / cloud.points.size());
       cloud.intensity.push_back(50.0f);
     }
-    toCloudMsg(cloud, scan_msg_);
+    toMsg(cloud, scan_msg_);
     scan_msg_.header.frame_id = "base_link";
   }
 

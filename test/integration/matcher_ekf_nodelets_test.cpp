@@ -24,7 +24,7 @@ std::unique_ptr<Harness> harness;
 
 void expectNearTruth(const geometry_msgs::Pose& p, double tol_xy, double tol_yaw,
                      const std::string& what) {
-  const Pose6 e = toPose6(fromPoseMsg(p));
+  const Pose6 e = fromIsometry(fromMsg(p));
   const Pose6 t = truth();
   EXPECT_LE(std::hypot(e.x - t.x, e.y - t.y), tol_xy) << what << " at " << e.x << ", " << e.y;
   EXPECT_LE(std::abs(angleDiff(e.yaw, t.yaw)), tol_yaw) << what << " yaw " << e.yaw;
@@ -110,7 +110,7 @@ TEST(MatcherEkfNodelets, AcceptedPoseWithinToleranceAndTheEkfFollows) {
         }
       },
       10.0));
-  expectNearTruth(toPoseMsg(tf2::transformToEigen(map_base)), 0.1, 0.01, "TF map -> base_link");
+  expectNearTruth(node::toMsg(tf2::transformToEigen(map_base)), 0.1, 0.01, "TF map -> base_link");
 }
 
 TEST(MatcherEkfNodelets, MalformedEmptyAndNanCloudsGiveStatusReasons) {
@@ -239,7 +239,7 @@ TEST(MatcherEkfNodelets, RelocalizeWidensTheWindowAndInitialPoseIsSearched) {
     p.x += dx;
     p.y += dy;
     p.z = 0.0;
-    click.pose.pose = toPoseMsg(fromPose6(p));
+    click.pose.pose = toMsg(p);
     click.pose.covariance[0] = click.pose.covariance[7] = 0.25;
     click.pose.covariance[35] = 0.0685;
     pub.publish(click);

@@ -189,7 +189,7 @@ TEST(VehicleReplay, LocalizesTheDriveAtTheExpectedRates) {
     try {
       const auto t =
           tf_buffer->lookupTransform("map", "base_link", od[last].header.stamp, ros::Duration(0.0));
-      const Pose6 via_tf = toPose6(fromTransformMsg(t.transform));
+      const Pose6 via_tf = fromIsometry(fromMsg(t.transform));
       const Pose6 ekf = toPose(od[last].pose.pose);
       EXPECT_LE(std::hypot(via_tf.x - ekf.x, via_tf.y - ekf.y), 0.05);
       EXPECT_LE(std::abs(angleDiff(via_tf.yaw, ekf.yaw)), 0.002);

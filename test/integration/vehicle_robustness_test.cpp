@@ -1,5 +1,5 @@
-// rostest of launch/localization.launch under faults (vehicle_robustness.test; issue 5 item 7,
-// the cases the nodelet rostests do not cover): this node plays the fixture's 20 s drive on sim
+// rostest of launch/localization.launch under faults (vehicle_robustness.test; the cases the
+// nodelet rostests do not cover): this node plays the fixture's 20 s drive on sim
 // time (vehicle_test_player.h) and breaks it on a schedule of bag times:
 //   [3.0, 5.5) s  IMU dropout             [7.0, 9.5) s  INS dropout (odometry + TF odom -> base)
 //   [10.5, 11.5) s scans in a frame TF does not know (missing TF)
@@ -56,7 +56,7 @@ void publishInitialPose(const Pose6& p, double rel_s) {
   Pose6 planar = p;
   planar.z = 0.0;  // rviz's 2D Pose Estimate: z, roll, pitch completed by the nodelets
   planar.roll = planar.pitch = 0.0;
-  msg.pose.pose = toPoseMsg(fromPose6(planar));
+  msg.pose.pose = toMsg(planar);
   msg.pose.covariance[0] = msg.pose.covariance[7] = 0.25;
   msg.pose.covariance[35] = 0.0076;
   initialpose_pub.publish(msg);

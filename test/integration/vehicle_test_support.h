@@ -28,7 +28,7 @@ namespace vehicle_test {
 
 inline double angleDiff(double a, double b) { return std::atan2(std::sin(a - b), std::cos(a - b)); }
 
-inline Pose6 toPose(const geometry_msgs::Pose& p) { return toPose6(fromPoseMsg(p)); }
+inline Pose6 toPose(const geometry_msgs::Pose& p) { return fromIsometry(fromMsg(p)); }
 
 template <size_t N>
 bool allFinite(const boost::array<double, N>& a) {

@@ -70,7 +70,7 @@ void put(PointCloud2& m, size_t row, size_t col, const std::string& name, T v) {
 TEST(CloudConversion, RoundTripKeepsEveryField) {
   const CloudData in = sample(100);
   PointCloud2 msg;
-  toCloudMsg(in, msg);
+  toMsg(in, msg);
   EXPECT_EQ(msg.width, 100u);
   EXPECT_EQ(msg.height, 1u);
   EXPECT_FALSE(msg.is_bigendian);
@@ -78,7 +78,7 @@ TEST(CloudConversion, RoundTripKeepsEveryField) {
   for (const char* name : {"x", "y", "z", "intensity", "time", "ring", "label"}) {
     EXPECT_NE(field(msg, name), nullptr) << name;
   }
-  auto out = fromCloudMsg(msg);
+  auto out = fromMsg(msg);
   ASSERT_TRUE(out.ok()) << out.error();
   EXPECT_EQ(out->points, in.points);
   EXPECT_EQ(out->time_s, in.time_s);
@@ -93,11 +93,11 @@ TEST(CloudConversion, OptionalFieldsAndExtraFloat) {
   in.label.resize(3);  // size disagrees with the points: left out, not written half
   std::vector<float> likelihood(10, -1.5f);
   PointCloud2 msg;
-  toCloudMsg(in, msg, "likelihood", likelihood);
+  toMsg(in, msg, "likelihood", likelihood);
   EXPECT_EQ(field(msg, "ring"), nullptr);
   EXPECT_EQ(field(msg, "label"), nullptr);
   ASSERT_NE(field(msg, "likelihood"), nullptr);
-  auto out = fromCloudMsg(msg);
+  auto out = fromMsg(msg);
   ASSERT_TRUE(out.ok());
   EXPECT_TRUE(out->ring.empty());
   EXPECT_TRUE(out->label.empty());
@@ -111,8 +111,8 @@ TEST(CloudConversion, NanPointsAreKept) {
   CloudData in = sample(3);
   in.points[1].x() = std::numeric_limits<float>::quiet_NaN();
   PointCloud2 msg;
-  toCloudMsg(in, msg);
-  auto out = fromCloudMsg(msg);
+  toMsg(in, msg);
+  auto out = fromMsg(msg);
   ASSERT_TRUE(out.ok());
   ASSERT_EQ(out->points.size(), 3u);
   EXPECT_TRUE(std::isnan(out->points[1].x()));
@@ -120,8 +120,8 @@ TEST(CloudConversion, NanPointsAreKept) {
 
 TEST(CloudConversion, EmptyCloud) {
   PointCloud2 msg;
-  toCloudMsg(CloudData(), msg);
-  auto out = fromCloudMsg(msg);
+  toMsg(CloudData(), msg);
+  auto out = fromMsg(msg);
   ASSERT_TRUE(out.ok()) << out.error();
   EXPECT_TRUE(out->points.empty());
 }
@@ -143,7 +143,7 @@ TEST(CloudConversion, Float64XyzOusterTimeAndOrganisedRows) {
       put<uint16_t>(m, r, c, "ring", static_cast<uint16_t>(r));
     }
   }
-  auto out = fromCloudMsg(m);
+  auto out = fromMsg(m);
   ASSERT_TRUE(out.ok()) << out.error();
   ASSERT_EQ(out->points.size(), 6u);
   EXPECT_EQ(out->points[4], Eigen::Vector3f(2.f, 10.f, -2.f));
@@ -152,13 +152,13 @@ TEST(CloudConversion, Float64XyzOusterTimeAndOrganisedRows) {
   EXPECT_TRUE(out->intensity.empty());
 }
 
-/// fromCloudMsg of a valid float32 x/y/z/intensity cloud after `mutate` fails mentioning `what`.
+/// fromMsg of a valid float32 x/y/z/intensity cloud after `mutate` fails mentioning `what`.
 template <typename F>
 void expectRejected(F mutate, const std::string& what) {
   PointCloud2 msg;
-  toCloudMsg(sample(8), msg);
+  toMsg(sample(8), msg);
   mutate(msg);
-  auto r = fromCloudMsg(msg);
+  auto r = fromMsg(msg);
   ASSERT_FALSE(r.ok()) << "accepted a cloud that should fail with '" << what << "'";
   EXPECT_NE(r.error().find(what), std::string::npos) << r.error();
 }
@@ -202,6 +202,78 @@ TEST(CloudConversion, MalformedCloudsAreRejected) {
         m.fields.back().offset = m.point_step;
       },
       "does not fit");
+}
+
+TEST(CloudConversion, OutOfRangeRingAndLabelValuesRejectTheCloud) {
+  const double kNan = std::numeric_limits<double>::quiet_NaN();
+  const double kInf = std::numeric_limits<double>::infinity();
+  struct Case {
+    const char* field;
+    double value;
+  };
+  for (const Case& c :
+       {Case{"ring", 70000.0}, Case{"ring", -1.0}, Case{"ring", kNan}, Case{"ring", 1e30},
+        Case{"label", 256.0}, Case{"label", -kInf}, Case{"label", kNan}, Case{"label", 3e9}}) {
+    for (uint8_t type : {PointField::FLOAT32, PointField::FLOAT64}) {
+      PointCloud2 m = makeCloud({{"x", PointField::FLOAT32},
+                                 {"y", PointField::FLOAT32},
+                                 {"z", PointField::FLOAT32},
+                                 {"ring", type},
+                                 {"label", type}},
+                                4, 1);
+      if (type == PointField::FLOAT32) {
+        put<float>(m, 0, 2, c.field, static_cast<float>(c.value));
+      } else {
+        put<double>(m, 0, 2, c.field, c.value);
+      }
+      auto r = fromMsg(m);
+      ASSERT_FALSE(r.ok()) << c.field << " " << c.value;
+      EXPECT_NE(r.error().find(std::string("field '") + c.field + "' of point 2"),
+                std::string::npos)
+          << r.error();
+    }
+  }
+  // In-range float values, the extremes included, are accepted (fractions truncated); an int32
+  // ring beyond uint16 is rejected too.
+  PointCloud2 m = makeCloud({{"x", PointField::FLOAT32},
+                             {"y", PointField::FLOAT32},
+                             {"z", PointField::FLOAT32},
+                             {"ring", PointField::FLOAT32},
+                             {"label", PointField::FLOAT64}},
+                            3, 1);
+  put<float>(m, 0, 0, "ring", 65535.f);
+  put<double>(m, 0, 0, "label", 255.0);
+  put<float>(m, 0, 1, "ring", 7.9f);
+  put<double>(m, 0, 1, "label", 2.0);
+  auto ok = fromMsg(m);
+  ASSERT_TRUE(ok.ok()) << ok.error();
+  EXPECT_EQ(ok->ring, (std::vector<uint16_t>{65535, 7, 0}));
+  EXPECT_EQ(ok->label, (std::vector<uint8_t>{255, 2, 0}));
+  m = makeCloud({{"x", PointField::FLOAT32},
+                 {"y", PointField::FLOAT32},
+                 {"z", PointField::FLOAT32},
+                 {"ring", PointField::INT32}},
+                2, 1);
+  put<int32_t>(m, 0, 1, "ring", 65536);
+  EXPECT_NE(fromMsg(m).error().find("field 'ring' of point 1 is 65536"), std::string::npos);
+}
+
+TEST(CloudConversion, Float64CoordinatesBeyondFloatRangeBecomeInfinite) {
+  PointCloud2 m = makeCloud({{"x", PointField::FLOAT64},
+                             {"y", PointField::FLOAT64},
+                             {"z", PointField::FLOAT64},
+                             {"intensity", PointField::FLOAT64}},
+                            2, 1);
+  put<double>(m, 0, 0, "x", 1e300);
+  put<double>(m, 0, 0, "y", -1e300);
+  put<double>(m, 0, 0, "intensity", 1e60);
+  put<double>(m, 0, 1, "x", 1.5);
+  auto r = fromMsg(m);
+  ASSERT_TRUE(r.ok()) << r.error();
+  EXPECT_TRUE(std::isinf(r->points[0].x()) && r->points[0].x() > 0.f);
+  EXPECT_TRUE(std::isinf(r->points[0].y()) && r->points[0].y() < 0.f);
+  EXPECT_TRUE(std::isinf(r->intensity[0]));
+  EXPECT_EQ(r->points[1].x(), 1.5f);
 }
 
 }  // namespace

@@ -133,7 +133,7 @@ TEST(OdometryConversions, EkfStateRoundTripsThroughTheMatchersPosterior) {
 TEST(PoseFromMsg, ValuesAndFailures) {
   geometry_msgs::PoseWithCovarianceStamped m;
   m.header.stamp = ros::Time(7.0);
-  m.pose.pose = toPoseMsg(toIsometry(Pose6{5.0, -1.0, 0.0, 0.0, 0.0, -0.7}));
+  m.pose.pose = toMsg(toIsometry(Pose6{5.0, -1.0, 0.0, 0.0, 0.0, -0.7}));
   m.pose.covariance[0] = 0.25;
   m.pose.covariance[35] = 0.07;
   auto p = poseFromMsg(m);

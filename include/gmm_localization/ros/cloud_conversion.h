@@ -25,13 +25,17 @@ struct CloudData {
 /// Reads a cloud. Accepts float32 or float64 x, y, z; a per-point time as float32/float64
 /// seconds ("time", "t" when float) or uint32 nanoseconds ("t", Ouster style); uint16 "ring";
 /// float32 "intensity"; uint8 "label". Fails with a reason naming the problem.
-Result<CloudData> fromCloudMsg(const sensor_msgs::PointCloud2& msg);
+/// "ring" and "label" may have any numeric datatype, but every value must be finite and within
+/// [0, 65535] resp. [0, 255] (fractions are truncated): otherwise the whole cloud is rejected,
+/// naming the field, the point and the value (a sensor driver emitting such values is broken,
+/// and silently clamping would mislabel points). Float values beyond the float32 range (from
+/// float64 fields) become +-inf.
+Result<CloudData> fromMsg(const sensor_msgs::PointCloud2& msg);
 
 /// Writes x, y, z (float32) and, when their sizes match, intensity, time, ring and label.
 /// extra_float_name/extra_float add one more float32 field (e.g. "likelihood").
-void toCloudMsg(const CloudData& cloud, sensor_msgs::PointCloud2& msg,
-                const std::string& extra_float_name = {},
-                const std::vector<float>& extra_float = {});
+void toMsg(const CloudData& cloud, sensor_msgs::PointCloud2& msg,
+           const std::string& extra_float_name = {}, const std::vector<float>& extra_float = {});
 
 }  // namespace node
 }  // namespace gmm_localization

@@ -1,5 +1,5 @@
 #pragma once
-// The cloud merger (issue 5, item 2): merges the sensors' clouds (four HDL-32Es) into one scan
+// The cloud merger: merges the sensors' clouds (four HDL-32Es) into one scan
 // in output_frame (base_link) and publishes it as velodyne_points.
 //
 // Topics (relative; remap in launch):
@@ -15,7 +15,7 @@
 // for every cloud; the last transform found for a frame is reused if a lookup fails (tf2 clears
 // its buffer, /tf_static included, when time jumps back). A sensor with no transform yet is
 // skipped with a throttled warning and a diagnostic.
-// Malformed clouds (node::fromCloudMsg: missing x/y/z, sizes that disagree, unsupported
+// Malformed clouds (node::fromMsg of a cloud: missing x/y/z, sizes that disagree, unsupported
 // types, big-endian) are dropped with a throttled warning and a diagnostic naming the reason.
 // Diagnostics: per input (rate, clouds, malformed, no TF, late, out of window, non-finite points
 // dropped), output (rate, complete / incomplete sets, missing sensors, merge latency, resets).

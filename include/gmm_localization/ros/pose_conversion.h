@@ -6,17 +6,19 @@
 #include <geometry_msgs/Transform.h>
 #include <Eigen/Geometry>
 
-#include "gmm_localization/core/matching/search_problem.h"
+#include "gmm_localization/core/common/types.h"
 
 namespace gmm_localization {
 namespace node {
 
-geometry_msgs::Pose toPoseMsg(const Eigen::Isometry3d& T);
-Eigen::Isometry3d fromPoseMsg(const geometry_msgs::Pose& p);
-Eigen::Isometry3d fromTransformMsg(const geometry_msgs::Transform& t);
-geometry_msgs::Transform toTransformMsg(const Eigen::Isometry3d& T);
-Pose6 toPose6(const Eigen::Isometry3d& T);
-Eigen::Isometry3d fromPose6(const Pose6& p);
+/// Isometry <-> Pose (the quaternion is normalised on the way in).
+geometry_msgs::Pose toMsg(const Eigen::Isometry3d& T);
+Eigen::Isometry3d fromMsg(const geometry_msgs::Pose& p);
+/// Isometry <-> Transform.
+void toMsg(const Eigen::Isometry3d& T, geometry_msgs::Transform& msg);
+Eigen::Isometry3d fromMsg(const geometry_msgs::Transform& t);
+/// Pose6 (core/common/types.h) <-> Pose.
+geometry_msgs::Pose toMsg(const Pose6& p);
 /// True when every number in the pose (and quaternion norm) is finite and sane.
 bool isFinite(const geometry_msgs::Pose& p);
 

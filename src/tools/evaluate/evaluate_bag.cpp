@@ -145,7 +145,7 @@ class Prefetcher {
                    topics_.base_frame + "' (merged clouds only)");
         return false;
       }
-      auto cloud = node::fromCloudMsg(*msg);
+      auto cloud = node::fromMsg(*msg);
       if (!cloud) {
         addProblem("cloud: " + cloud.error());
         return false;
