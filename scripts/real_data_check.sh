@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Real-data checks (issues 2, 3 and 6 item 5; docs/real_data.md), one command:
+# Real-data checks (the map and the registration on real scans; docs/real_data.md), one command:
 #  1. a Gaussian mixture map from the five KITTI 07 keyframes, each cell classed ground / wall /
 #     vegetation / other / below ground from its points, the mixtures per class (tables) and
 #     PNGs: the paper's Fig. 3 view (top-down and oblique) and the example cells;
@@ -12,7 +12,7 @@
 #
 # Environment (defaults):
 #   KITTI_DIR     ../shared/data/real/kitti07_keyframes (relative to the repository)
-#   DEMO_MAP      /work/data/demo/map (skipped when absent)
+#   DEMO_MAP      $GMM_DEMO_DIR/map, default .ws/demo/map as demo.sh writes it (skipped when absent)
 #   WORK          $GMM_WS/real_data
 #   IMAGES        docs/images
 #   OFFSETS       100 offsets per keyframe and window;  TUNED_OFFSETS 20 for the tuned peers
@@ -20,7 +20,7 @@
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/env.sh"
 KITTI_DIR="${KITTI_DIR:-$GMM_REPO/../shared/data/real/kitti07_keyframes}"
-DEMO_MAP="${DEMO_MAP:-/work/data/demo/map}"
+DEMO_MAP="${DEMO_MAP:-${GMM_DEMO_DIR:-$GMM_WS/demo}/map}"
 WORK="${WORK:-$GMM_WS/real_data}"
 IMAGES="${IMAGES:-$GMM_REPO/docs/images}"
 OFFSETS="${OFFSETS:-100}"

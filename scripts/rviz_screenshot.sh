@@ -4,7 +4,7 @@
 # screen once the bag has played SHOT_AT_S seconds.
 #
 # Usage: scripts/rviz_screenshot.sh BAG MAP [OUT_PNG]
-#   e.g. scripts/rviz_screenshot.sh /work/data/demo/downtown.bag /work/data/demo/map docs/images/rviz_replay.png
+#   e.g. scripts/rviz_screenshot.sh .ws/demo/downtown.bag .ws/demo/map docs/images/rviz_replay.png
 # Environment: SHOT_AT_S (bag seconds, default 24), RATE (playback rate, default 0.5: rviz renders
 #   in software under Xvfb and shares the cores), SCREEN (default :97), PORT (ROS master, 11397),
 #   SIZE (default 1280x800).

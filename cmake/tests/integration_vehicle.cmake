@@ -1,4 +1,4 @@
-# Rostests of the real launch files (issue 5, item 8) on a fixture generated at build time:
+# Rostests of the real launch files on a fixture generated at build time:
 # scripts/make_test_fixture.sh runs the repository's simulate and build_map (a 250 m town, a
 # 20 s drive, its map; about 15-20 s on 2 cores) into the build directory.
 #  - roslaunch checks of every launch file (with their required args);

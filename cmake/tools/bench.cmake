@@ -1,4 +1,4 @@
-# bench_registration: the registration benchmark (issue 3), with PCL NDT and GICP as peers.
+# bench_registration: the registration benchmark, with PCL NDT and GICP as peers.
 gmm_add_tool(bench_registration
   SOURCES src/tools/bench/bench_registration.cpp src/tools/bench/bench_data.cpp
           src/tools/bench/bench_peers.cpp

@@ -1,4 +1,4 @@
-# kitti_check: real-data checks on KITTI keyframes (issues 2, 3 and 6): mixtures per class of
+# kitti_check: real-data checks on KITTI keyframes (docs/real_data.md): mixtures per class of
 # cell, and leave-one-out registration against PCL NDT and GICP. The peers are the benchmark's
 # own (src/tools/bench/bench_peers.cpp), compiled into this library unchanged.
 add_library(gmm_kitti_check STATIC

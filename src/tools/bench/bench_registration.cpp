@@ -1,4 +1,4 @@
-// bench_registration: the registration benchmark of issue 3. Prints markdown tables of search
+// bench_registration: the registration benchmark. Prints markdown tables of search
 // time, evaluations and equality with the exhaustive search for the paper's window and a
 // tracking window, success and time of PCL NDT and GICP from the same offsets, and time against
 // scan size. All numbers come from this run, as ratios where the machine's noise matters.

@@ -11,7 +11,7 @@ namespace {
 
 constexpr double kSuccessM = 0.5;  // Fig. 8: "within 0.5 m of the ground truth"
 
-/// Issue 6 targets {longitudinal, lateral} RMS [m] for a dataset; {0, 0} when none.
+/// The accuracy targets {longitudinal, lateral} RMS [m] for a dataset; {0, 0} when none.
 std::array<double, 2> targetRms(const std::string& dataset) {
   if (dataset == "downtown") return {0.075, 0.05};
   if (dataset == "snowy") return {0.09, 0.06};
@@ -231,8 +231,7 @@ std::string summaryMarkdown(const EvaluationResults& r, const Summary& s) {
     << cm(s.raw.rms_lateral_m) << " | " << fixed(s.raw.rms_yaw_rad * 180.0 / M_PI, 3) << " deg | "
     << s.raw.count << " | " << s.accepted << " accepted of " << s.scans << " scans |\n";
   if (target[0] > 0) {
-    o << "| target (issue 6) | " << cm(target[0]) << " | " << cm(target[1])
-      << " | - | - | 10 Hz |\n";
+    o << "| target | " << cm(target[0]) << " | " << cm(target[1]) << " | - | - | 10 Hz |\n";
   }
   if (s.ekf_unlocalized > 0) {
     o << "\nEKF samples with a reported sigma above " << fixed(kLocalizedSigmaM, 1)

@@ -27,7 +27,10 @@ struct Key3Eq {
   bool operator()(const Eigen::Vector3i& a, const Eigen::Vector3i& b) const { return a == b; }
 };
 
-int64_t key2(int64_t x, int64_t y) { return (x << 32) ^ (y & 0xffffffffLL); }
+// (Shifted as unsigned: a left shift of a negative value is undefined.)
+int64_t key2(int64_t x, int64_t y) {
+  return static_cast<int64_t>(static_cast<uint64_t>(x) << 32) ^ (y & 0xffffffffLL);
+}
 
 /// Lowest height of a square with at least min(kSupport, n) of its points within band_m above
 /// it: isolated returns below the ground (reflection ghosts) do not pull the level down.

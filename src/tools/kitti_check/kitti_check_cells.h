@@ -1,5 +1,5 @@
 #pragma once
-// What the Gaussian mixtures look like on real ground, walls and vegetation (issue 2): each map
+// What the Gaussian mixtures look like on real ground, walls and vegetation: each map
 // cell with data is given a class from the points it was built from, by the local shape of
 // those points (eigenvalues of their covariance within a ball, Demantke et al. 2011's
 // dimensionality features), and the mixtures are summarised per class.
