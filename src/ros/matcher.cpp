@@ -10,23 +10,27 @@
 namespace gmm_localization {
 namespace node {
 
+MatcherSession makeMatcherSession(const MatcherOptions& options) {
+  MatcherSession session(options.session, options.policy);
+  if (options.initial_pose_enabled) {
+    const WindowExtent window = configuredPoseWindow(options);
+    session.setConfiguredPose(options.initial_pose, options.initial_pose_z_known, &window);
+  }
+  return session;
+}
+
 Matcher::Matcher(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& name)
     : name_(name),
       nh_(nh),
       pnh_(pnh),
-      options_(loadMatcherOptions(pnh)),
+      options_(loadNodeletOptions(pnh, name, loadMatcherOptions)),
       tf_listener_(tf_buffer_),
-      tracker_(options_.policy),
-      odometry_(options_.odometry_buffer_s, options_.odometry_max_extrapolation_s,
-                options_.time_backwards_tolerance_s),
+      session_(makeMatcherSession(options_)),
       scan_rate_(0.5 * options_.expected_scan_rate_hz, 2.0 * options_.expected_scan_rate_hz),
       match_rate_(0.0, 1e9) {
   auto processor = MatchProcessor::create(options_.registration, options_.policy);
   if (!processor) throw ConfigError(processor.error());
   processor_ = std::make_unique<MatchProcessor>(std::move(processor).value());
-  waiting_ = DropOldestQueue<sensor_msgs::PointCloud2::ConstPtr>(
-      static_cast<size_t>(options_.scan_queue_size));
-  armConfiguredPose();
 
   pose_pub_ = nh_.advertise<geometry_msgs::PoseWithCovarianceStamped>("pose", 10);
   status_pub_ = nh_.advertise<MatchStatus>("status", 10);
@@ -57,7 +61,7 @@ Matcher::~Matcher() {
   }
   diagnostics_.reset();
   {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
+    std::lock_guard<std::mutex> lock(session_mutex_);
     stop_ = true;
   }
   queue_cv_.notify_all();

@@ -48,6 +48,11 @@ void Matcher::setupDiagnostics() {
       version = map_client_.mapVersion();
       have_index = map_client_.hasIndex();
     }
+    uint64_t dropped_total = 0;
+    {
+      std::lock_guard<std::mutex> lock(session_mutex_);
+      dropped_total = session_.droppedTotal();
+    }
     std::lock_guard<std::mutex> lock(stats_mutex_);
     scan_rate_.fill(s, "scan");
     s.add("match (accepted) rate [Hz]", fixed(match_rate_.rateHz(), 2));
@@ -66,7 +71,7 @@ void Matcher::setupDiagnostics() {
               fixed(last_window_.half_heading_rad * 180.0 / M_PI, 1));
     s.add("chunks held", chunks);
     s.add("map version", version);
-    s.add("dropped scans (total)", dropped_total_);
+    s.add("dropped scans (total)", dropped_total);
     s.add("malformed or empty clouds", bad_clouds_);
     s.add("time went backwards (resets)", time_resets_);
     s.add("prior mode", last_mode_);

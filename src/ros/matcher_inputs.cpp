@@ -9,13 +9,6 @@
 namespace gmm_localization {
 namespace node {
 
-void Matcher::armConfiguredPose() {
-  if (!options_.initial_pose_enabled) return;
-  const WindowExtent window = configuredPoseWindow(options_);
-  tracker_.setExplicitPose(options_.initial_pose, NAN, PriorSource::kConfigured,
-                           options_.initial_pose_z_known, &window);
-}
-
 void Matcher::onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
   if (!msg->child_frame_id.empty() && msg->child_frame_id != options_.base_frame) {
     ROS_WARN_THROTTLE(10.0,
@@ -26,8 +19,8 @@ void Matcher::onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
   const OdometrySample sample = odometrySampleFromMsg(*msg);
   OdometryBuffer::AddResult r;
   {
-    std::lock_guard<std::mutex> lock(state_mutex_);
-    r = odometry_.add(sample);
+    std::lock_guard<std::mutex> lock(session_mutex_);
+    r = session_.addOdometry(sample);
   }
   if (r == OdometryBuffer::AddResult::kTimeWentBackwards) {
     ROS_WARN_THROTTLE(2.0, "%s: INS odometry went back in time: its buffer restarted",
@@ -44,8 +37,8 @@ void Matcher::onPosterior(const nav_msgs::Odometry::ConstPtr& msg) {
                       msg->header.frame_id.c_str(), options_.map_frame.c_str());
     return;
   }
-  std::lock_guard<std::mutex> lock(state_mutex_);
-  tracker_.setPosterior(posteriorFromOdometryMsg(*msg));  // ignores non-finite estimates
+  std::lock_guard<std::mutex> lock(session_mutex_);
+  session_.setPosterior(posteriorFromOdometryMsg(*msg));  // ignores non-finite estimates
 }
 
 void Matcher::onInitialPose(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg) {
@@ -59,9 +52,8 @@ void Matcher::onInitialPose(const geometry_msgs::PoseWithCovarianceStamped::Cons
   bool z_known = false;
   Pose6 full;
   {
-    std::lock_guard<std::mutex> lock(state_mutex_);
-    full = tracker_.completePlanarPose(pose->pose, &odometry_, &z_known);
-    tracker_.setExplicitPose(full, stamp, PriorSource::kInitialPose, z_known);
+    std::lock_guard<std::mutex> lock(session_mutex_);
+    full = session_.setInitialPose(pose->pose, stamp, /*z_known=*/false, &z_known);
   }
   ROS_INFO("%s: initial pose x %.2f y %.2f yaw %.3f (z %.2f %s): searching the wide window",
            name_.c_str(), full.x, full.y, full.yaw, full.z,
@@ -86,8 +78,12 @@ void Matcher::onChunk(const RasterChunk::ConstPtr& msg) {
 void Matcher::onIndex(const MapIndex::ConstPtr& msg) {
   std::lock_guard<std::mutex> lock(map_mutex_);
   const uint64_t previous = map_client_.mapVersion();
-  const size_t dropped = map_client_.onIndex(msg);
-  if (map_client_.mapVersion() != previous) {
+  std::string rejected;
+  const size_t dropped = map_client_.onIndex(msg, &rejected);
+  if (!rejected.empty()) {
+    ROS_WARN_THROTTLE(5.0, "%s: map index ignored (the current map stays in use): %s",
+                      name_.c_str(), rejected.c_str());
+  } else if (map_client_.mapVersion() != previous) {
     ROS_INFO("%s: map version %lu ('%s'), %zu chunks listed", name_.c_str(),
              static_cast<unsigned long>(map_client_.mapVersion()), msg->map_directory.c_str(),
              msg->chunk_x.size());

@@ -112,15 +112,16 @@ MatcherOptions loadMatcherOptions(const ParamSource& pnh) {
   }
   o.registration = loadRegistrationOptions(pnh);
   o.policy = loadLocalizationPolicyOptions(pnh);
-  o.deskew = param(pnh, "deskew", o.deskew);
-  o.deskew_twist_max_gap_s =
-      param(pnh, "deskew_twist_max_gap_s", o.deskew_twist_max_gap_s, 0.0, 10.0);
-  o.odometry_buffer_s = param(pnh, "odometry_buffer_s", o.odometry_buffer_s, 0.1, 3600.0);
-  o.odometry_max_extrapolation_s =
-      param(pnh, "odometry_max_extrapolation_s", o.odometry_max_extrapolation_s, 0.0, 10.0);
-  o.time_backwards_tolerance_s =
-      param(pnh, "time_backwards_tolerance_s", o.time_backwards_tolerance_s, 0.0, kBig);
-  o.scan_queue_size = param(pnh, "scan_queue_size", o.scan_queue_size, 1, 100);
+  MatchSessionOptions& s = o.session;
+  s.deskew = param(pnh, "deskew", s.deskew);
+  s.deskew_twist_max_gap_s =
+      param(pnh, "deskew_twist_max_gap_s", s.deskew_twist_max_gap_s, 0.0, 10.0);
+  s.odometry_buffer_s = param(pnh, "odometry_buffer_s", s.odometry_buffer_s, 0.1, 3600.0);
+  s.odometry_max_extrapolation_s =
+      param(pnh, "odometry_max_extrapolation_s", s.odometry_max_extrapolation_s, 0.0, 10.0);
+  s.time_backwards_tolerance_s =
+      param(pnh, "time_backwards_tolerance_s", s.time_backwards_tolerance_s, 0.0, kBig);
+  s.scan_queue_size = param(pnh, "scan_queue_size", s.scan_queue_size, 1, 100);
 
   o.initial_pose_enabled = param(pnh, "initial_pose/enabled", o.initial_pose_enabled);
   o.initial_pose.x = param(pnh, "initial_pose/x", o.initial_pose.x, -kBig, kBig);
@@ -132,7 +133,8 @@ MatcherOptions loadMatcherOptions(const ParamSource& pnh) {
       param(pnh, "initial_pose/window_half_xy_m", o.initial_pose_half_xy_m, 0.2, 100.0);
   o.initial_pose_half_heading_rad =
       param(pnh, "initial_pose/window_half_heading_rad", o.initial_pose_half_heading_rad, 0.0, 3.2);
-  o.configured_pose_on_reset = param(pnh, "initial_pose/on_reset", o.configured_pose_on_reset);
+  s.configured_pose_on_reset = param(pnh, "initial_pose/on_reset", s.configured_pose_on_reset);
+  requireValid("matcher session options", s.validate());
 
   o.obstacles_frame = param<std::string>(pnh, "obstacles_frame", o.obstacles_frame);
   if (o.obstacles_frame != o.base_frame && o.obstacles_frame != o.map_frame) {
@@ -158,12 +160,7 @@ LocalizerPipelineOptions pipelineOptions(const MatcherOptions& m, const EkfNodeO
   o.filter = e.filter;
   o.registration = m.registration;
   o.policy = m.policy;
-  o.odometry_buffer_s = m.odometry_buffer_s;
-  o.odometry_max_extrapolation_s = m.odometry_max_extrapolation_s;
-  o.deskew = m.deskew;
-  o.deskew_twist_max_gap_s = m.deskew_twist_max_gap_s;
-  o.time_backwards_tolerance_s = m.time_backwards_tolerance_s;
-  o.configured_pose_on_reset = m.configured_pose_on_reset;
+  o.session = m.session;
   return o;
 }
 

@@ -15,21 +15,14 @@ namespace node {
 
 void Matcher::onScan(const sensor_msgs::PointCloud2::ConstPtr& msg) {
   scan_rate_.tick();
-  // Time going backwards (a looping bag): forget the state of the other timeline.
-  const double stamp = msg->header.stamp.toSec();
-  double jump = 0.0;
+  // Time going backwards (a looping bag): the session forgets the state of the other timeline
+  // and drops the waiting scans of the old timeline.
+  MatcherSession::Arrival arrival;
   {
-    std::lock_guard<std::mutex> lock(state_mutex_);
-    if (have_last_scan_ && stamp < last_scan_stamp_s_ - options_.time_backwards_tolerance_s) {
-      jump = last_scan_stamp_s_ - stamp;
-      tracker_.reset();
-      ++epoch_;
-      if (options_.configured_pose_on_reset) armConfiguredPose();
-    }
-    have_last_scan_ = true;
-    last_scan_stamp_s_ = stamp;
+    std::lock_guard<std::mutex> lock(session_mutex_);
+    arrival = session_.onScanArrival(msg->header.stamp.toSec());
   }
-  if (jump > 0.0) {
+  if (arrival.timeWentBackwards()) {
     {
       std::lock_guard<std::mutex> lock(stats_mutex_);
       ++time_resets_;
@@ -37,22 +30,15 @@ void Matcher::onScan(const sensor_msgs::PointCloud2::ConstPtr& msg) {
     char reason[160];
     std::snprintf(reason, sizeof(reason),
                   "time went backwards by %.3f s: matcher state cleared, waiting for a prior",
-                  jump);
+                  arrival.backwards_jump_s);
     ROS_WARN("%s: %s", name_.c_str(), reason);
     publishSkipped(msg->header.stamp, reason, 0);
   }
   {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
     // A slow match (the first, wide search) leaves a backlog that the tracking matches after it
-    // drain; beyond the queue's size the oldest scan goes. After time went backwards, the
-    // waiting scans of the old timeline go too.
-    size_t dropped = jump > 0.0 ? waiting_.clear() : 0;
-    dropped += waiting_.push(msg);
-    if (dropped > 0) {
-      dropped_since_status_ += static_cast<uint32_t>(dropped);
-      std::lock_guard<std::mutex> stats(stats_mutex_);
-      dropped_total_ += dropped;
-    }
+    // drain; beyond the queue's size the oldest scan goes (counted in the next status).
+    std::lock_guard<std::mutex> lock(session_mutex_);
+    session_.enqueue(msg);
   }
   queue_cv_.notify_one();
 }
@@ -62,12 +48,12 @@ void Matcher::workerLoop() {
     sensor_msgs::PointCloud2::ConstPtr msg;
     uint32_t dropped = 0;
     {
-      std::unique_lock<std::mutex> lock(queue_mutex_);
-      queue_cv_.wait(lock, [this] { return stop_ || !waiting_.empty(); });
+      std::unique_lock<std::mutex> lock(session_mutex_);
+      queue_cv_.wait(lock, [this] { return stop_ || session_.hasWaiting(); });
       if (stop_) return;
-      msg = waiting_.pop();
-      dropped = dropped_since_status_;
-      dropped_since_status_ = 0;
+      MatcherSession::Next next = session_.takeNext();
+      msg = std::move(next.item);
+      dropped = next.dropped_before;
     }
     try {
       processScan(msg, dropped);
@@ -79,7 +65,7 @@ void Matcher::workerLoop() {
 
 bool Matcher::scanToBase(const sensor_msgs::PointCloud2& msg, ScanInput* scan,
                          std::string* reason) {
-  auto cloud = fromCloudMsg(msg);
+  auto cloud = fromMsg(msg);
   if (!cloud) {
     *reason = "malformed cloud: " + cloud.error();
     return false;
@@ -122,16 +108,10 @@ void Matcher::processScan(const sensor_msgs::PointCloud2::ConstPtr& msg, uint32_
     publishSkipped(msg->header.stamp, reason, dropped);
     return;
   }
-  Prior prior;
-  std::optional<BodyTwist> twist;
-  uint64_t epoch = 0;
+  MatchStart start;
   {
-    std::lock_guard<std::mutex> lock(state_mutex_);
-    prior = tracker_.priorAt(scan.stamp_s, &odometry_);
-    if (options_.deskew) {
-      twist = deskewTwist(scan, odometry_, tracker_, options_.deskew_twist_max_gap_s);
-    }
-    epoch = epoch_;
+    std::lock_guard<std::mutex> lock(session_mutex_);
+    start = session_.beginMatch(scan);
   }
   std::shared_ptr<const ChunkMap> map;
   {
@@ -141,21 +121,14 @@ void Matcher::processScan(const sensor_msgs::PointCloud2::ConstPtr& msg, uint32_
   static const ChunkMap kEmpty;
   const bool want_traversal = traversal_pub_.getNumSubscribers() > 0;
   MatchReport report =
-      processor_->process(map ? *map : kEmpty, std::move(scan), prior, twist ? &*twist : nullptr,
+      processor_->process(map ? *map : kEmpty, std::move(scan), start.prior, start.twistOrNull(),
                           want_traversal, [] { return ros::WallTime::now().toSec(); });
   std::string mode;
   {
-    std::lock_guard<std::mutex> lock(state_mutex_);
-    if (epoch != epoch_) {
-      report.outcome = MatchOutcome::kSkipped;
-      report.reason = "discarded: time went backwards during the match";
-    } else if (report.outcome == MatchOutcome::kAccepted) {
-      tracker_.onAccepted(report.stamp_s, report.pose, planarCovariance(report.covariance),
-                          report.prior);
-    } else if (report.outcome == MatchOutcome::kRejected) {
-      tracker_.onRejected();
-    }
-    mode = priorModeName(tracker_.mode());
+    // Discards a match begun before time went backwards; else the tracker learns the outcome.
+    std::lock_guard<std::mutex> lock(session_mutex_);
+    session_.finishMatch(start.epoch, &report);
+    mode = priorModeName(session_.tracker().mode());
   }
   {
     std::lock_guard<std::mutex> lock(stats_mutex_);

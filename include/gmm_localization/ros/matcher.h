@@ -1,9 +1,10 @@
 #pragma once
-// The matcher (issue 5, item 3): registers each merged scan in the rasterized map (paper
-// Algorithm 1: branch-and-bound search + hill climb) around a prior and publishes the pose with
-// the search-space covariance. The per-scan logic is the ROS-free MatchProcessor + PriorTracker
-// (core/localizer_pipeline_match.h, core/localization_policy_prior.h), shared with
-// LocalizerPipeline, so `evaluate` reproduces what this node does.
+// The matcher: registers each merged scan in the rasterized map (paper Algorithm 1:
+// branch-and-bound search + hill climb) around a prior and publishes the pose with the
+// search-space covariance. The per-scan logic is the ROS-free MatchSession (prior tracking, the
+// time rule, the scan queue, the outcome handling; core/localization/match_session.h) and
+// MatchProcessor (core/localization/match_processor.h), shared with LocalizerPipeline, so
+// `evaluate` reproduces what this node does.
 //
 // Subscribed (relative names; remap in launch):
 //   velodyne_points  sensor_msgs/PointCloud2, merged scan in base_frame (another frame is moved
@@ -23,10 +24,11 @@
 //   obstacles        sensor_msgs/PointCloud2 of obstacle points (obstacles_frame)  [on demand]
 //   scan_classified  sensor_msgs/PointCloud2, scan in map with mahalanobis + class [on demand]
 //   search_traversal sensor_msgs/Image, the branch-and-bound traversal (Fig. 9)   [on demand]
-// Threads: ROS callbacks (serialised, non-blocking) and one worker that takes only the newest
-// scan: a scan still waiting when a newer one arrives is dropped and counted in the next status.
-// The worker searches a snapshot of the map (immutable shared chunks): chunk callbacks never
-// wait for a match.
+// Threads: ROS callbacks (serialised, non-blocking) and one worker. Scans wait in the session's
+// queue (scan_queue_size, oldest dropped when full, drops counted in the next status); the
+// worker takes the oldest. The session is not synchronised: session_mutex_ guards every call,
+// never held during a match. The worker searches a snapshot of the map (immutable shared
+// chunks): chunk callbacks never wait for a match.
 
 #include <atomic>
 #include <condition_variable>
@@ -45,14 +47,20 @@
 
 #include "gmm_localization/MapIndex.h"
 #include "gmm_localization/RasterChunk.h"
-#include "gmm_localization/core/common/drop_oldest_queue.h"
-#include "gmm_localization/core/localization/localizer_pipeline.h"
+#include "gmm_localization/core/localization/match_processor.h"
+#include "gmm_localization/core/localization/match_session.h"
 #include "gmm_localization/ros/diagnostics.h"
 #include "gmm_localization/ros/map_server_client.h"
 #include "gmm_localization/ros/matcher_options.h"
 
 namespace gmm_localization {
 namespace node {
+
+/// The nodelet's session: scans wait as received and are converted by the worker.
+using MatcherSession = MatchSession<sensor_msgs::PointCloud2::ConstPtr>;
+/// The session the nodelet runs with these options: options.session with options.policy, and
+/// the configured initial pose (with configuredPoseWindow()) armed when initial_pose_enabled.
+MatcherSession makeMatcherSession(const MatcherOptions& options);
 
 class Matcher {
  public:
@@ -69,7 +77,6 @@ class Matcher {
   void onInitialPose(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg);
   void onChunk(const RasterChunk::ConstPtr& msg);
   void onIndex(const MapIndex::ConstPtr& msg);
-  void armConfiguredPose();  // needs state_mutex_
   // matcher_worker.cpp: scan intake, the worker, one scan's processing.
   void onScan(const sensor_msgs::PointCloud2::ConstPtr& msg);
   void workerLoop();
@@ -92,32 +99,25 @@ class Matcher {
   ros::Publisher pose_pub_, status_pub_, obstacles_pub_, classified_pub_, traversal_pub_;
   std::unique_ptr<Diagnostics> diagnostics_;
 
-  // Localization state, shared by the callbacks and the worker.
-  std::mutex state_mutex_;
-  PriorTracker tracker_;
-  OdometryBuffer odometry_;
-  bool have_last_scan_ = false;
-  double last_scan_stamp_s_ = 0.0;
-  uint64_t epoch_ = 0;  ///< incremented when time goes backwards: older results are discarded
+  // The session (prior tracking, time rule, scan queue), shared by the callbacks and the
+  // worker; queue_cv_ wakes the worker when a scan is queued or stop_ is set.
+  std::mutex session_mutex_;
+  std::condition_variable queue_cv_;
+  MatcherSession session_;
+  bool stop_ = false;
 
   // The map: protocol state and the snapshot the worker searches.
   std::mutex map_mutex_;
   MapServerClient map_client_;
   std::shared_ptr<const ChunkMap> map_snapshot_;
 
-  // The bounded scan queue (options_.scan_queue_size, oldest dropped when full) and the worker.
-  std::mutex queue_mutex_;
-  std::condition_variable queue_cv_;
-  DropOldestQueue<sensor_msgs::PointCloud2::ConstPtr> waiting_{3};
-  uint32_t dropped_since_status_ = 0;
-  bool stop_ = false;
   std::thread worker_;
 
   // Diagnostics (stats_mutex_).
   std::mutex stats_mutex_;
   FrequencyMonitor scan_rate_, match_rate_;
   std::deque<bool> recent_accepted_;
-  uint64_t scans_ = 0, accepted_ = 0, dropped_total_ = 0, time_resets_ = 0, bad_clouds_ = 0;
+  uint64_t scans_ = 0, accepted_ = 0, time_resets_ = 0, bad_clouds_ = 0;
   std::string last_reason_;
   double last_ll_per_point_ = 0.0, last_search_ms_ = 0.0, last_total_ms_ = 0.0;
   WindowExtent last_window_;

@@ -10,6 +10,7 @@
 
 #include "gmm_localization/core/localization/localizer_pipeline.h"
 #include "gmm_localization/core/localization/match_policy.h"
+#include "gmm_localization/core/localization/match_session.h"
 #include "gmm_localization/core/matching/registration.h"
 #include "gmm_localization/core/matching/traversal_image.h"
 #include "gmm_localization/ros/ekf_node_options.h"
@@ -24,14 +25,10 @@ struct MatcherOptions {
   RegistrationOptions registration;
   LocalizationPolicyOptions policy;
 
-  bool deskew = true;                   ///< motion-compensate scans with the INS twist
-  double deskew_twist_max_gap_s = 0.2;  ///< INS sample within this of mid-scan [s]
-  double odometry_buffer_s = 10.0;      ///< INS history kept [s]
-  double odometry_max_extrapolation_s = 0.3;
-  double time_backwards_tolerance_s = 1.0;  ///< scan stamp regression that clears the state [s]
-  /// Scans waiting while one is matched, in arrival order; when full the oldest is dropped
-  /// (1: only the latest waits, the behaviour of a queue_size 1 subscriber).
-  int scan_queue_size = 3;
+  /// deskew, deskew_twist_max_gap_s, odometry_buffer_s, odometry_max_extrapolation_s,
+  /// time_backwards_tolerance_s, scan_queue_size and initial_pose/on_reset (the keys of the
+  /// same names): the MatchSession's options, copied as one into LocalizerPipelineOptions.
+  MatchSessionOptions session;
 
   /// Configured initial pose (unattended start): searched with its window at the first scan.
   bool initial_pose_enabled = false;
@@ -39,7 +36,6 @@ struct MatcherOptions {
   bool initial_pose_z_known = true;
   double initial_pose_half_xy_m = 12.5;           ///< its window [m]
   double initial_pose_half_heading_rad = 0.2618;  ///< [rad]
-  bool configured_pose_on_reset = true;           ///< search it again after time went backwards
 
   std::string obstacles_frame = "base_link";  ///< base_frame or map_frame
   double classified_max_mahalanobis = 10.0;   ///< clamp of the `mahalanobis` field
@@ -57,9 +53,10 @@ RegistrationOptions loadRegistrationOptions(const ParamSource& nh);
 LocalizationPolicyOptions loadLocalizationPolicyOptions(const ParamSource& nh);
 
 /// The LocalizerPipeline options equivalent to a matcher + ekf nodelet pair with these options
-/// (for `evaluate`: load both with the loaders above from the same YAML files). The configured
-/// initial pose is not included: call LocalizerPipeline::setConfiguredPose with
-/// configuredPoseWindow() when matcher.initial_pose_enabled.
+/// (for `evaluate`: load both with the loaders above from the same YAML files): the session
+/// options (scan queue included) are copied as one. The configured initial pose is not
+/// included: call LocalizerPipeline::setConfiguredPose with configuredPoseWindow() when
+/// matcher.initial_pose_enabled.
 LocalizerPipelineOptions pipelineOptions(const MatcherOptions& matcher, const EkfNodeOptions& ekf);
 /// The configured initial pose's own window.
 WindowExtent configuredPoseWindow(const MatcherOptions& matcher);

@@ -1,24 +1,15 @@
 #include "gmm_localization/core/localization/localizer_pipeline.h"
 
 #include <algorithm>
-#include <cmath>
-#include <sstream>
 
 #include "gmm_localization/core/common/option_checks.h"
 
 namespace gmm_localization {
 
 std::string LocalizerPipelineOptions::validate() const {
-  const auto bad = rangeProblem;
-  for (const std::string& e :
-       {bad("odometry_buffer_s", odometry_buffer_s, 0.1, 3600.0),
-        bad("odometry_max_extrapolation_s", odometry_max_extrapolation_s, 0.0, 10.0),
-        bad("deskew_twist_max_gap_s", deskew_twist_max_gap_s, 0.0, 10.0),
-        bad("scan_arrival_delay_s", scan_arrival_delay_s, 0.0, 10.0),
-        bad("time_backwards_tolerance_s", time_backwards_tolerance_s, 0.0, 1e6)}) {
-    if (!e.empty()) return e;
-  }
-  return {};
+  const std::string e = session.validate();
+  if (!e.empty()) return e;
+  return rangeProblem("scan_arrival_delay_s", scan_arrival_delay_s, 0.0, 10.0);
 }
 
 PosteriorEstimate posteriorFromState(const EkfState& state) {
@@ -29,20 +20,6 @@ PosteriorEstimate posteriorFromState(const EkfState& state) {
   p.twist.linear_mps = state.linearVelocity();
   p.twist.angular_radps = state.angularVelocity();
   return p;
-}
-
-std::optional<BodyTwist> deskewTwist(const ScanInput& scan, const OdometryBuffer& odometry,
-                                     const PriorTracker& tracker, double max_gap_s) {
-  float t_max = 0.f;
-  for (float t : scan.time_s) {
-    if (std::isfinite(t)) t_max = std::max(t_max, t);
-  }
-  const auto twist = odometry.twistAt(scan.stamp_s + 0.5 * t_max, max_gap_s);
-  if (twist.ok()) return twist.value();
-  if (tracker.hasPosterior() && std::abs(tracker.posterior().stamp_s - scan.stamp_s) <= max_gap_s) {
-    return tracker.posterior().twist;
-  }
-  return std::nullopt;
 }
 
 Result<LocalizerPipeline> LocalizerPipeline::create(const LocalizerPipelineOptions& options) {
@@ -61,26 +38,18 @@ LocalizerPipeline::LocalizerPipeline(const LocalizerPipelineOptions& options,
     : options_(options),
       filter_(std::move(filter)),
       processor_(std::move(processor)),
-      tracker_(options.policy),
-      odometry_(options.odometry_buffer_s, options.odometry_max_extrapolation_s,
-                options.time_backwards_tolerance_s) {}
+      session_(options.session, options.policy) {}
 
 void LocalizerPipeline::setConfiguredPose(const Pose6& pose, bool z_known,
                                           const WindowExtent* window) {
-  configured_pose_ = pose;
-  configured_z_known_ = z_known;
-  configured_window_.reset();
-  if (window != nullptr) configured_window_ = *window;
-  tracker_.setExplicitPose(pose, NAN, PriorSource::kConfigured, z_known, window);
+  session_.setConfiguredPose(pose, z_known, window);
 }
 
 Status LocalizerPipeline::setInitialPose(const Pose6& pose, const Matrix6d& covariance,
                                          double stamp_s, bool z_known) {
   advanceTo(stamp_s);
   // The matcher completes a planar pose from what it knows; the filter from its own state.
-  bool completed_z = z_known;
-  const Pose6 full = z_known ? pose : tracker_.completePlanarPose(pose, &odometry_, &completed_z);
-  tracker_.setExplicitPose(full, stamp_s, PriorSource::kInitialPose, completed_z);
+  session_.setInitialPose(pose, stamp_s, z_known);
   return filter_.setInitialPose(pose, covariance, stamp_s, z_known);
 }
 
@@ -96,29 +65,20 @@ void LocalizerPipeline::addImu(const ImuMeasurement& imu) {
 
 void LocalizerPipeline::addOdometry(const OdometrySample& sample, const TwistMeasurement& twist) {
   advanceTo(sample.stamp_s);
-  odometry_.add(sample);
+  session_.addOdometry(sample);
   filter_.addTwist(twist);
 }
 
 void LocalizerPipeline::addScan(ScanInput scan, double processing_latency_s) {
   const double arrival = scan.stamp_s + options_.scan_arrival_delay_s;
   advanceTo(arrival);
-  if (have_last_scan_ && scan.stamp_s < last_scan_stamp_s_ - options_.time_backwards_tolerance_s) {
-    resetMatcher();
-  }
-  have_last_scan_ = true;
-  last_scan_stamp_s_ = scan.stamp_s;
-  if (!in_flight_) {
-    start(std::move(scan), arrival, arrival, processing_latency_s);
-    return;
-  }
-  if (waiting_) {
-    ++dropped_since_report_;
-    ++dropped_total_;
-  }
-  waiting_ = std::move(scan);
-  waiting_arrival_s_ = arrival;
-  waiting_latency_s_ = processing_latency_s;
+  // Time going backwards resets the session and drops the waiting scans; a match running on
+  // the old timeline is completed now and discarded by the epoch check (the nodelet's worker
+  // discards it when it finishes).
+  const auto a = session_.onScanArrival(scan.stamp_s);
+  if (a.timeWentBackwards() && in_flight_) complete();
+  session_.enqueue(WaitingScan{std::move(scan), arrival, processing_latency_s});
+  if (!in_flight_) startNext(arrival);
 }
 
 void LocalizerPipeline::flush() {
@@ -132,72 +92,45 @@ std::vector<PipelineScanReport> LocalizerPipeline::takeReports() {
 }
 
 void LocalizerPipeline::advanceTo(double t) {
-  while (in_flight_ && in_flight_->finish_s <= t) complete();
+  while (in_flight_ && in_flight_->report.finish_s <= t) complete();
 }
 
-void LocalizerPipeline::start(ScanInput scan, double arrival_s, double start_s, double latency_s) {
+void LocalizerPipeline::startNext(double now) {
+  auto next = session_.takeNext();
+  WaitingScan& w = next.item;
+  const double start_s = std::max(now, w.arrival_s);
   // What the ekf nodelet last published before the worker picked the scan up.
   if (filter_.active()) {
     const auto state = filter_.stateAt(start_s);
-    if (state.ok()) tracker_.setPosterior(posteriorFromState(state.value()));
+    if (state.ok()) session_.setPosterior(posteriorFromState(state.value()));
   }
-  const Prior prior = tracker_.priorAt(scan.stamp_s, &odometry_);
-  std::optional<BodyTwist> twist;
-  if (options_.deskew)
-    twist = deskewTwist(scan, odometry_, tracker_, options_.deskew_twist_max_gap_s);
+  const MatchStart m = session_.beginMatch(w.scan);
   PipelineScanReport r;
-  r.arrival_s = arrival_s;
+  r.arrival_s = w.arrival_s;
   r.start_s = start_s;
-  r.dropped_before = dropped_since_report_;
-  dropped_since_report_ = 0;
+  r.dropped_before = next.dropped_before;
   static const ChunkMap kEmpty;
-  r.match =
-      processor_.process(map_ ? *map_ : kEmpty, std::move(scan), prior, twist ? &*twist : nullptr,
-                         options_.record_traversal, options_.clock);
-  const double latency = latency_s >= 0.0 ? latency_s : r.match.total_s;
+  r.match = processor_.process(map_ ? *map_ : kEmpty, std::move(w.scan), m.prior, m.twistOrNull(),
+                               options_.record_traversal, options_.clock);
+  const double latency = w.latency_s >= 0.0 ? w.latency_s : r.match.total_s;
   r.finish_s = start_s + std::max(0.0, latency);
-  in_flight_ = std::move(r);
+  in_flight_ = InFlight{std::move(r), m.epoch};
 }
 
 void LocalizerPipeline::complete() {
-  PipelineScanReport r = std::move(*in_flight_);
+  InFlight f = std::move(*in_flight_);
   in_flight_.reset();
-  // Matcher side: the outcome feeds the relocalization state machine.
-  const MatchReport& m = r.match;
-  if (m.outcome == MatchOutcome::kAccepted) {
-    tracker_.onAccepted(m.stamp_s, m.pose, planarCovariance(m.covariance), m.prior);
+  PipelineScanReport& r = f.report;
+  // Matcher side: the outcome feeds the relocalization state machine (or is discarded).
+  if (session_.finishMatch(f.epoch, &r.match) && r.match.accepted()) {
     // EKF side: the published pose arrives (a delayed measurement).
+    const MatchReport& m = r.match;
     r.offered_to_filter = true;
     r.fuse = filter_.addMatch(m.stamp_s, m.pose, m.covariance);
-  } else if (m.outcome == MatchOutcome::kRejected) {
-    tracker_.onRejected();
   }
   const double finish = r.finish_s;
   reports_.push_back(std::move(r));
-  if (waiting_) {
-    ScanInput next = std::move(*waiting_);
-    waiting_.reset();
-    start(std::move(next), waiting_arrival_s_, std::max(finish, waiting_arrival_s_),
-          waiting_latency_s_);
-  }
-}
-
-void LocalizerPipeline::resetMatcher() {
-  // A match running on the old timeline is discarded (the nodelet's worker does the same).
-  if (in_flight_) {
-    PipelineScanReport r = std::move(*in_flight_);
-    r.match.outcome = MatchOutcome::kSkipped;
-    r.match.reason = "discarded: time went backwards during the match";
-    reports_.push_back(std::move(r));
-    in_flight_.reset();
-  }
-  waiting_.reset();
-  tracker_.reset();
-  ++resets_;
-  if (configured_pose_ && options_.configured_pose_on_reset) {
-    tracker_.setExplicitPose(*configured_pose_, NAN, PriorSource::kConfigured, configured_z_known_,
-                             configured_window_ ? &*configured_window_ : nullptr);
-  }
+  if (session_.hasWaiting()) startNext(finish);
 }
 
 }  // namespace gmm_localization

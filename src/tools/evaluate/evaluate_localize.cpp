@@ -79,11 +79,7 @@ class BagRun {
     const auto truth = truth_.at(stamp, kTruthGapS);
     if (offsets_ != nullptr && truth && scan_index_ % offset_stride_ == 0 &&
         offsets_submitted_ < static_cast<size_t>(c_.offset_scans)) {
-      std::optional<BodyTwist> twist;
-      if (pipeline_.options().deskew) {
-        twist = deskewTwist(s.scan, pipeline_.odometry(), pipeline_.tracker(),
-                            pipeline_.options().deskew_twist_max_gap_s);
-      }
+      const std::optional<BodyTwist> twist = pipeline_.session().deskewTwistFor(s.scan);
       offsets_->submit(s.scan, toPose6(*truth), twist);
       ++offsets_submitted_;
     }
@@ -240,9 +236,10 @@ Result<EvaluationResults> runBagEvaluation(const BagEvaluationConfig& c, std::os
   node::EkfNodeOptions ekf;
   RasterOptions raster;
   try {
-    matcher = node::loadMatcherOptions(yamlParamSource(c.matcher_yaml, c.matcher_overrides));
-    ekf = node::loadEkfNodeOptions(yamlParamSource(c.ekf_yaml, c.ekf_overrides));
-    raster = loadRasterOptions(yamlParamSource(c.map_server_yaml));
+    // Unknown keys of the files (typos) are named on stderr.
+    matcher = loadYamlOptions(node::loadMatcherOptions, c.matcher_yaml, c.matcher_overrides);
+    ekf = loadYamlOptions(node::loadEkfNodeOptions, c.ekf_yaml, c.ekf_overrides);
+    raster = loadMapServerYamlRaster(c.map_server_yaml);
   } catch (const node::ConfigError& e) {
     return R::failure(e.what());
   }

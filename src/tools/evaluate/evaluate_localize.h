@@ -1,9 +1,9 @@
 #pragma once
 // Mode A of `evaluate`: reads a localization bag directly and runs it through LocalizerPipeline
-// (the matcher and ekf nodelets' logic on a virtual clock, core/localizer_pipeline.h) with the
-// nodelets' options loaded from the same YAML files, then scores the EKF output, the raw
-// matches, the obstacle labels and (optionally) registrations from random offsets against the
-// bag's ground truth. Deterministic when the match latency is fixed (the default).
+// (the matcher and ekf nodelets' logic on a virtual clock, core/localization/localizer_pipeline.h)
+// with the nodelets' options loaded from the same YAML files, then scores the EKF output, the
+// raw matches, the obstacle labels and (optionally) registrations from random offsets against
+// the bag's ground truth. Deterministic when the match latency is fixed (the default).
 
 #include <cstdint>
 #include <iosfwd>

@@ -1,9 +1,9 @@
 // LocalizerPipeline on a synthetic street (test/unit/support/synthetic_world.h): a short drive
 // with IMU, drifting INS odometry and scans from the true poses. The pipeline must start from a
 // configured pose off by metres, stay within tolerance of the truth with delayed matches, drop
-// stale scans when matching is slower than the scan rate, widen its window after rejected
-// matches and recover, and recover from time going backwards (a looping bag). Also the search
-// traversal picture (paper Fig. 9).
+// the oldest waiting scans (the nodelet's scan queue, MatchSession) when matching is slower than
+// the scan rate, widen its window after rejected matches and recover, and recover from time
+// going backwards (a looping bag). Also the search traversal picture (paper Fig. 9).
 
 #include "gmm_localization/core/localization/localizer_pipeline.h"
 #include "gmm_localization/core/matching/traversal_image.h"
@@ -11,6 +11,8 @@
 #include <cmath>
 #include <map>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -195,25 +197,43 @@ TEST_F(LocalizerPipelineTest, TracksTheDriveFromAnOffsetConfiguredPoseWithDelaye
 }
 
 TEST_F(LocalizerPipelineTest, DropsStaleScansWhenMatchingIsSlowerThanTheScanRate) {
-  auto created = LocalizerPipeline::create(options());
-  ASSERT_TRUE(created.ok());
-  LocalizerPipeline& p = created.value();
-  p.setMap(map_);
-  p.setConfiguredPose(offsetPose(truth(0.05), 1.0, 1.0, 0.0), true);
-  drive(p, kT0, 1.2);  // a match takes 1.2 s, scans every 0.5 s
-  const auto reports = p.takeReports();
-  uint64_t dropped = 0;
-  for (const auto& r : reports) {
-    dropped += r.dropped_before;
-    EXPECT_TRUE(r.match.accepted()) << r.match.reason;
-    // A waiting scan starts when the previous one finishes, never before it arrived.
-    EXPECT_GE(r.start_s, r.arrival_s);
-  }
-  EXPECT_EQ(dropped + reports.size(), 12u);
-  EXPECT_EQ(dropped, p.droppedScans());
-  EXPECT_GE(p.droppedScans(), 5u);
-  for (size_t k = 1; k < reports.size(); ++k) {
-    EXPECT_GE(reports[k].start_s, reports[k - 1].finish_s);
+  // The pipeline models the nodelet's shipped scan queue (session.scan_queue_size 3: scans wait
+  // in arrival order, a scan arriving at a full queue drops the oldest), no longer one waiting
+  // slot; the single slot is still there with scan_queue_size 1 (checked below).
+  for (const int queue_size : {3, 1}) {
+    LocalizerPipelineOptions o = options();
+    o.session.scan_queue_size = queue_size;
+    auto created = LocalizerPipeline::create(o);
+    ASSERT_TRUE(created.ok());
+    LocalizerPipeline& p = created.value();
+    p.setMap(map_);
+    p.setConfiguredPose(offsetPose(truth(0.05), 1.0, 1.0, 0.0), true);
+    drive(p, kT0, 1.2);  // a match takes 1.2 s, scans every 0.5 s
+    const auto reports = p.takeReports();
+    const std::string what = "scan_queue_size " + std::to_string(queue_size);
+    uint64_t dropped = 0;
+    std::vector<int> matched;
+    for (const auto& r : reports) {
+      dropped += r.dropped_before;
+      EXPECT_TRUE(r.match.accepted()) << what << ": " << r.match.reason;
+      // A waiting scan starts when the previous one finishes, never before it arrived.
+      EXPECT_GE(r.start_s, r.arrival_s) << what;
+      matched.push_back(
+          static_cast<int>(std::lround((r.match.stamp_s - kT0 - 0.05) / kScanPeriod)));
+    }
+    EXPECT_EQ(dropped + reports.size(), 12u) << what;
+    EXPECT_EQ(dropped, p.droppedScans()) << what;
+    for (size_t k = 1; k < reports.size(); ++k) {
+      EXPECT_GE(reports[k].start_s, reports[k - 1].finish_s) << what;
+    }
+    if (queue_size == 3) {
+      // Scans 3, 4, 6 and 8 were the oldest waiting when the queue was full; the three waiting
+      // at the end of the drive are matched by flush().
+      EXPECT_EQ(matched, (std::vector<int>{0, 1, 2, 5, 7, 9, 10, 11}));
+      EXPECT_EQ(p.droppedScans(), 4u);
+    } else {
+      EXPECT_GE(p.droppedScans(), 5u);
+    }
   }
 }
 

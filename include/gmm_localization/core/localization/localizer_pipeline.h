@@ -1,21 +1,26 @@
 #pragma once
 // LocalizerPipeline: the matcher and ekf nodelets' logic without ROS, for the offline
 // `evaluate` tool and for tests. It composes the same classes the nodelets use -
-// LocalizationFilter (the ekf nodelet), PriorTracker + MatchProcessor (the matcher nodelet) and
-// an OdometryBuffer - and reproduces the nodelets' timing on a virtual clock:
+// LocalizationFilter (the ekf nodelet), MatchSession + MatchProcessor (the matcher nodelet;
+// the session owns the PriorTracker and the OdometryBuffer) - and reproduces the nodelets'
+// timing on a virtual clock:
 //
 // - Inputs are given in time order (IMU, INS odometry, scans; a bag's order). The virtual time
 //   is the stamp of the newest input (a scan "arrives" at stamp + scan_arrival_delay_s).
-// - One matcher worker: a scan that arrives while the worker is idle starts at once; one that
-//   arrives while it is busy waits in a single slot, and a newer scan replaces it (the older
-//   is dropped and counted in the next report), exactly as the nodelet's worker.
+// - One matcher worker and the nodelet's scan queue (MatchSession, session.scan_queue_size,
+//   3 as shipped): a scan that arrives while the worker is idle starts at once; one that
+//   arrives while it is busy waits in the queue, in arrival order; a scan arriving at a full
+//   queue drops the oldest waiting one (counted in the next report), exactly as the nodelet's
+//   worker. When a match finishes, the oldest waiting scan starts.
 // - A match started at time t_start uses the EKF posterior at t_start (what the ekf nodelet
 //   last published) carried by odometry to the scan stamp; its result becomes available at
 //   t_start + processing_latency_s, when it is fused into the filter as a delayed measurement
 //   (the filter re-fuses the IMU and odometry received since its stamp), and the prior tracker
-//   learns the outcome.
-// - Scan stamps going backwards by more than time_backwards_tolerance_s reset the matcher
-//   state (the filter resets itself on its own inputs), re-arming the configured pose.
+//   learns the outcome (MatchSession::finishMatch).
+// - Scan stamps going backwards by more than session.time_backwards_tolerance_s reset the
+//   matcher session (the filter resets itself on its own inputs), re-arming the configured
+//   pose; the waiting scans are dropped and a running match is completed at once and discarded
+//   by the session's epoch check, as the nodelet discards it when it finishes.
 //
 // Deterministic for a given input sequence when every latency is given (>= 0); a negative
 // latency uses the measured processing time (needs `clock`).
@@ -29,6 +34,7 @@
 
 #include "gmm_localization/core/localization/localization_filter.h"
 #include "gmm_localization/core/localization/match_processor.h"
+#include "gmm_localization/core/localization/match_session.h"
 
 namespace gmm_localization {
 
@@ -37,14 +43,9 @@ struct LocalizerPipelineOptions {
   FilterPolicyOptions filter;
   RegistrationOptions registration;
   LocalizationPolicyOptions policy;
-  double odometry_buffer_s = 10.0;            ///< INS history kept [s]
-  double odometry_max_extrapolation_s = 0.3;  ///< [s] past the newest INS sample
-  bool deskew = true;                         ///< motion-compensate scans with the INS twist
-  double deskew_twist_max_gap_s = 0.2;        ///< INS sample within this of mid-scan [s]
-  double scan_arrival_delay_s = 0.0;          ///< scan available at stamp + this [s]
-  double time_backwards_tolerance_s = 1.0;    ///< scan stamp regression that resets [s]
-  bool configured_pose_on_reset = true;       ///< re-arm the configured pose after a reset
-  bool record_traversal = false;              ///< keep each search's traversal in its report
+  MatchSessionOptions session;        ///< the matcher nodelet's session (and scan queue)
+  double scan_arrival_delay_s = 0.0;  ///< scan available at stamp + this [s]
+  bool record_traversal = false;      ///< keep each search's traversal in its report
   /// Optional clock [s] for the timings and for measured latencies (negative latency).
   std::function<double()> clock;
 
@@ -69,7 +70,8 @@ class LocalizerPipeline {
   /// The rasterized map to search (shared, immutable while the pipeline holds it).
   void setMap(std::shared_ptr<const ChunkMap> map) { map_ = std::move(map); }
   /// Like the matcher's configured initial pose: searched with the wide window at the next
-  /// scan (not carried by odometry), and again after each reset when configured_pose_on_reset.
+  /// scan (not carried by odometry), and again after each reset when
+  /// session.configured_pose_on_reset.
   /// window: its own search window (null: the policy's wide window).
   void setConfiguredPose(const Pose6& pose, bool z_known, const WindowExtent* window = nullptr);
   /// Like /initialpose received by both nodelets at stamp_s: the filter is (re)started there
@@ -87,7 +89,7 @@ class LocalizerPipeline {
   /// A merged scan in base_link; processing_latency_s: how long its match takes [s] (< 0:
   /// measured with options.clock).
   void addScan(ScanInput scan, double processing_latency_s);
-  /// Completes the running and the waiting scan (end of input).
+  /// Completes the running and the waiting scans (end of input).
   void flush();
 
   /// Reports of the scans completed since the last call, in completion order.
@@ -95,47 +97,44 @@ class LocalizerPipeline {
   /// The filter's state at time_s (fails when the filter is not running).
   Result<EkfState> stateAt(double time_s) const { return filter_.stateAt(time_s); }
   const LocalizationFilter& filter() const { return filter_; }
-  const PriorTracker& tracker() const { return tracker_; }
-  const OdometryBuffer& odometry() const { return odometry_; }
+  const MatchSessionState& session() const { return session_; }
+  const PriorTracker& tracker() const { return session_.tracker(); }
+  const OdometryBuffer& odometry() const { return session_.odometry(); }
   const LocalizerPipelineOptions& options() const { return options_; }
-  uint64_t droppedScans() const { return dropped_total_; }
-  uint64_t resets() const { return resets_; }
+  uint64_t droppedScans() const { return session_.droppedTotal(); }
+  uint64_t resets() const { return session_.resets(); }
 
  private:
   LocalizerPipeline(const LocalizerPipelineOptions& options, LocalizationFilter filter,
                     MatchProcessor processor);
+  /// A scan waiting for the worker.
+  struct WaitingScan {
+    ScanInput scan;
+    double arrival_s = 0.0;
+    double latency_s = 0.0;
+  };
+  /// A running match: its report and the session epoch it began in.
+  struct InFlight {
+    PipelineScanReport report;
+    uint64_t epoch = 0;
+  };
+
   void advanceTo(double t);
+  /// Completes the running match; then the oldest waiting scan starts (unless it was discarded
+  /// by a reset).
   void complete();
-  void start(ScanInput scan, double arrival_s, double start_s, double latency_s);
-  void resetMatcher();
+  /// Starts the oldest waiting scan, not before `now` nor before it arrived.
+  void startNext(double now);
 
   LocalizerPipelineOptions options_;
   LocalizationFilter filter_;
   MatchProcessor processor_;
-  PriorTracker tracker_;
-  OdometryBuffer odometry_;
+  MatchSession<WaitingScan> session_;
   std::shared_ptr<const ChunkMap> map_;
-  std::optional<Pose6> configured_pose_;
-  bool configured_z_known_ = true;
-  std::optional<WindowExtent> configured_window_;
 
-  std::optional<PipelineScanReport> in_flight_;
-  std::optional<ScanInput> waiting_;
-  double waiting_arrival_s_ = 0.0;
-  double waiting_latency_s_ = 0.0;
-  uint32_t dropped_since_report_ = 0;
-  uint64_t dropped_total_ = 0;
-  uint64_t resets_ = 0;
-  bool have_last_scan_ = false;
-  double last_scan_stamp_s_ = 0.0;
+  std::optional<InFlight> in_flight_;
   std::vector<PipelineScanReport> reports_;
 };
-
-/// The twist used to deskew a scan: the INS sample nearest to the middle of the revolution
-/// (stamp + half the largest point time) within max_gap_s; else the posterior's twist when the
-/// tracker holds one within max_gap_s of the stamp; else none. Shared by the matcher nodelet.
-std::optional<BodyTwist> deskewTwist(const ScanInput& scan, const OdometryBuffer& odometry,
-                                     const PriorTracker& tracker, double max_gap_s);
 
 /// The posterior the ekf nodelet publishes, from a filter state.
 PosteriorEstimate posteriorFromState(const EkfState& state);

@@ -1,0 +1,191 @@
+#pragma once
+// MatchSession: the matcher's session rules, ROS-free, shared by the matcher nodelet
+// (ros/matcher.h, on its subscriber and worker threads) and by LocalizerPipeline (the offline
+// model `evaluate` runs on a virtual clock), so that both follow literally the same rules:
+//
+// - State: the PriorTracker, the OdometryBuffer (INS history), the configured pose and an
+//   epoch.
+// - Time: a scan stamped earlier than the previous scan by more than time_backwards_tolerance_s
+//   (a looping bag) resets the tracker, increments the epoch, drops every waiting scan (counted)
+//   and, when configured_pose_on_reset, arms the configured pose again.
+// - Queue: scans wait in arrival order in a DropOldestQueue of scan_queue_size entries; a scan
+//   arriving at a full queue drops the oldest. Drops are counted in total and since the last
+//   scan taken (the count the next status or report carries). The scan being matched is not in
+//   the queue.
+// - Start: a match starts from beginMatch(): the tracker's prior at the scan stamp (carried by
+//   odometry), the deskew twist (deskewTwist(), when deskew) and the current epoch.
+// - Outcome: finishMatch() applies the result of a match begun with that epoch: begun in an
+//   older epoch -> discarded (outcome skipped, reason "discarded: time went backwards during the
+//   match"); accepted -> PriorTracker::onAccepted with the (x, y, yaw) block of the published
+//   covariance; rejected -> PriorTracker::onRejected; skipped -> nothing.
+//
+// MatchSession<Item> queues Items (the nodelet: the received clouds, converted in its worker;
+// LocalizerPipeline: the scan with its arrival time and latency). The rules that do not depend
+// on the item type are in MatchSessionState (match_session.cpp).
+//
+// Thread-safety: not synchronised (like PriorTracker and DropOldestQueue): the owner serialises
+// every call. The matcher nodelet holds its session mutex around each call; the match itself
+// (MatchProcessor::process) runs outside it, between beginMatch() and finishMatch().
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <utility>
+
+#include "gmm_localization/core/common/drop_oldest_queue.h"
+#include "gmm_localization/core/common/types.h"
+#include "gmm_localization/core/localization/match_policy.h"
+#include "gmm_localization/core/localization/match_processor.h"
+#include "gmm_localization/core/localization/prior_tracker.h"
+
+namespace gmm_localization {
+
+/// The session options (the matcher nodelet's parameters of the same names, config/matcher.yaml;
+/// configured_pose_on_reset is initial_pose/on_reset).
+struct MatchSessionOptions {
+  double odometry_buffer_s = 10.0;            ///< INS history kept [s]
+  double odometry_max_extrapolation_s = 0.3;  ///< [s] past the newest INS sample
+  bool deskew = true;                         ///< motion-compensate scans with the INS twist
+  double deskew_twist_max_gap_s = 0.2;        ///< INS sample within this of mid-scan [s]
+  double time_backwards_tolerance_s = 1.0;    ///< scan stamp regression that resets [s]
+  bool configured_pose_on_reset = true;       ///< re-arm the configured pose after a reset
+  /// Scans waiting while one is matched, in arrival order; when full the oldest is dropped
+  /// (1: only the latest waits, the behaviour of a queue_size 1 subscriber).
+  int scan_queue_size = 3;
+
+  /// Empty when valid, else the first offending key with its value and range (the nodelet
+  /// loader's ranges).
+  std::string validate() const;
+};
+
+/// The twist used to deskew a scan: the INS sample nearest to the middle of the revolution
+/// (stamp + half the largest point time) within max_gap_s; else the posterior's twist when the
+/// tracker holds one within max_gap_s of the stamp; else none.
+std::optional<BodyTwist> deskewTwist(const ScanInput& scan, const OdometryBuffer& odometry,
+                                     const PriorTracker& tracker, double max_gap_s);
+
+/// What a scan's match starts from (MatchSessionState::beginMatch).
+struct MatchStart {
+  Prior prior;
+  std::optional<BodyTwist> twist;  ///< for deskewing; none: not deskewed
+  uint64_t epoch = 0;              ///< give it back to finishMatch()
+  const BodyTwist* twistOrNull() const { return twist ? &*twist : nullptr; }
+};
+
+/// The session rules that do not depend on the queued item type (see the file comment).
+class MatchSessionState {
+ public:
+  /// Options must be valid (validate()); policy: the tracker's.
+  MatchSessionState(const MatchSessionOptions& options, const LocalizationPolicyOptions& policy);
+
+  const MatchSessionOptions& options() const { return options_; }
+
+  /// INS odometry (OdometryBuffer::add).
+  OdometryBuffer::AddResult addOdometry(const OdometrySample& sample);
+  /// The EKF posterior (PriorTracker::setPosterior: keeps the newest, ignores non-finite).
+  void setPosterior(const PosteriorEstimate& posterior);
+  /// The configured initial pose: armed now (searched with `window`, null: the policy's wide
+  /// window, at the next scan, not carried by odometry) and again after each reset when
+  /// configured_pose_on_reset.
+  void setConfiguredPose(const Pose6& pose, bool z_known, const WindowExtent* window = nullptr);
+  /// An initial pose (/initialpose) at stamp_s (NaN: valid at any time). z_known false: a planar
+  /// pose, completed with z, roll and pitch (PriorTracker::completePlanarPose). Returns the pose
+  /// searched around; *searched_z_known: whether its height is known.
+  Pose6 setInitialPose(const Pose6& pose, double stamp_s, bool z_known,
+                       bool* searched_z_known = nullptr);
+
+  /// The prior, deskew twist and epoch for this scan's match.
+  MatchStart beginMatch(const ScanInput& scan) const;
+  /// The deskew twist for this scan (none when deskew is off or no twist is known).
+  std::optional<BodyTwist> deskewTwistFor(const ScanInput& scan) const;
+  /// Applies the outcome of a match begun in `epoch` (see the file comment). Returns false when
+  /// the report was discarded (it is then a skipped report with the reason set).
+  bool finishMatch(uint64_t epoch, MatchReport* report);
+
+  const PriorTracker& tracker() const { return tracker_; }
+  const OdometryBuffer& odometry() const { return odometry_; }
+  uint64_t epoch() const { return epoch_; }
+  uint64_t resets() const { return resets_; }  ///< times time went backwards
+
+ protected:
+  /// The time rule for a scan stamped stamp_s: returns how far time went backwards [s] (> 0:
+  /// the session was reset and the caller drops the waiting scans), else 0.
+  double checkScanStamp(double stamp_s);
+
+ private:
+  void armConfiguredPose();
+
+  MatchSessionOptions options_;
+  PriorTracker tracker_;
+  OdometryBuffer odometry_;
+  uint64_t epoch_ = 0;
+  uint64_t resets_ = 0;
+  bool have_last_scan_ = false;
+  double last_scan_stamp_s_ = 0.0;
+  std::optional<Pose6> configured_pose_;
+  bool configured_z_known_ = true;
+  std::optional<WindowExtent> configured_window_;
+};
+
+/// The session with its scan queue of Items.
+template <typename Item>
+class MatchSession : public MatchSessionState {
+ public:
+  /// A scan's arrival (onScanArrival).
+  struct Arrival {
+    double backwards_jump_s = 0.0;  ///< > 0: time went backwards by this; the session was reset
+    size_t dropped = 0;             ///< waiting scans of the old timeline dropped by the reset
+    bool timeWentBackwards() const { return backwards_jump_s > 0.0; }
+  };
+  /// The oldest waiting scan (takeNext).
+  struct Next {
+    Item item;
+    uint32_t dropped_before = 0;  ///< scans dropped since the previous takeNext()
+  };
+
+  MatchSession(const MatchSessionOptions& options, const LocalizationPolicyOptions& policy)
+      : MatchSessionState(options, policy),
+        waiting_(static_cast<size_t>(std::max(1, options.scan_queue_size))) {}
+
+  /// Call when a scan stamped stamp_s arrives, before enqueue(): applies the time rule; after a
+  /// reset the waiting scans are dropped (counted).
+  Arrival onScanArrival(double stamp_s) {
+    Arrival a;
+    a.backwards_jump_s = checkScanStamp(stamp_s);
+    if (a.timeWentBackwards()) a.dropped = count(waiting_.clear());
+    return a;
+  }
+  /// Queues a scan; returns how many of the oldest were dropped to make room.
+  size_t enqueue(Item item) { return count(waiting_.push(std::move(item))); }
+  /// onScanArrival() then enqueue(); Arrival::dropped counts both.
+  Arrival arrive(double stamp_s, Item item) {
+    Arrival a = onScanArrival(stamp_s);
+    a.dropped += enqueue(std::move(item));
+    return a;
+  }
+
+  bool hasWaiting() const { return !waiting_.empty(); }
+  size_t waiting() const { return waiting_.size(); }
+  size_t queueCapacity() const { return waiting_.capacity(); }
+  /// Removes the oldest waiting scan, with the drops since the previous one. Precondition:
+  /// hasWaiting().
+  Next takeNext() {
+    Next n{waiting_.pop(), dropped_since_taken_};
+    dropped_since_taken_ = 0;
+    return n;
+  }
+  uint64_t droppedTotal() const { return waiting_.droppedTotal(); }
+
+ private:
+  size_t count(size_t dropped) {
+    dropped_since_taken_ += static_cast<uint32_t>(dropped);
+    return dropped;
+  }
+
+  DropOldestQueue<Item> waiting_;
+  uint32_t dropped_since_taken_ = 0;
+};
+
+}  // namespace gmm_localization

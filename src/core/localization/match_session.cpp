@@ -1,0 +1,118 @@
+#include "gmm_localization/core/localization/match_session.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "gmm_localization/core/common/option_checks.h"
+
+namespace gmm_localization {
+
+std::string MatchSessionOptions::validate() const {
+  const auto bad = rangeProblem;
+  for (const std::string& e :
+       {bad("odometry_buffer_s", odometry_buffer_s, 0.1, 3600.0),
+        bad("odometry_max_extrapolation_s", odometry_max_extrapolation_s, 0.0, 10.0),
+        bad("deskew_twist_max_gap_s", deskew_twist_max_gap_s, 0.0, 10.0),
+        bad("time_backwards_tolerance_s", time_backwards_tolerance_s, 0.0, 1e9),
+        bad("scan_queue_size", scan_queue_size, 1, 100)}) {
+    if (!e.empty()) return e;
+  }
+  return {};
+}
+
+std::optional<BodyTwist> deskewTwist(const ScanInput& scan, const OdometryBuffer& odometry,
+                                     const PriorTracker& tracker, double max_gap_s) {
+  float t_max = 0.f;
+  for (float t : scan.time_s) {
+    if (std::isfinite(t)) t_max = std::max(t_max, t);
+  }
+  const auto twist = odometry.twistAt(scan.stamp_s + 0.5 * t_max, max_gap_s);
+  if (twist.ok()) return twist.value();
+  if (tracker.hasPosterior() && std::abs(tracker.posterior().stamp_s - scan.stamp_s) <= max_gap_s) {
+    return tracker.posterior().twist;
+  }
+  return std::nullopt;
+}
+
+MatchSessionState::MatchSessionState(const MatchSessionOptions& options,
+                                     const LocalizationPolicyOptions& policy)
+    : options_(options),
+      tracker_(policy),
+      odometry_(options.odometry_buffer_s, options.odometry_max_extrapolation_s,
+                options.time_backwards_tolerance_s) {}
+
+OdometryBuffer::AddResult MatchSessionState::addOdometry(const OdometrySample& sample) {
+  return odometry_.add(sample);
+}
+
+void MatchSessionState::setPosterior(const PosteriorEstimate& posterior) {
+  tracker_.setPosterior(posterior);
+}
+
+void MatchSessionState::setConfiguredPose(const Pose6& pose, bool z_known,
+                                          const WindowExtent* window) {
+  configured_pose_ = pose;
+  configured_z_known_ = z_known;
+  configured_window_.reset();
+  if (window != nullptr) configured_window_ = *window;
+  armConfiguredPose();
+}
+
+Pose6 MatchSessionState::setInitialPose(const Pose6& pose, double stamp_s, bool z_known,
+                                        bool* searched_z_known) {
+  bool completed_z = z_known;
+  const Pose6 full = z_known ? pose : tracker_.completePlanarPose(pose, &odometry_, &completed_z);
+  tracker_.setExplicitPose(full, stamp_s, PriorSource::kInitialPose, completed_z);
+  if (searched_z_known != nullptr) *searched_z_known = completed_z;
+  return full;
+}
+
+MatchStart MatchSessionState::beginMatch(const ScanInput& scan) const {
+  MatchStart s;
+  s.prior = tracker_.priorAt(scan.stamp_s, &odometry_);
+  s.twist = deskewTwistFor(scan);
+  s.epoch = epoch_;
+  return s;
+}
+
+std::optional<BodyTwist> MatchSessionState::deskewTwistFor(const ScanInput& scan) const {
+  if (!options_.deskew) return std::nullopt;
+  return deskewTwist(scan, odometry_, tracker_, options_.deskew_twist_max_gap_s);
+}
+
+bool MatchSessionState::finishMatch(uint64_t epoch, MatchReport* report) {
+  if (epoch != epoch_) {
+    report->outcome = MatchOutcome::kSkipped;
+    report->reason = "discarded: time went backwards during the match";
+    return false;
+  }
+  if (report->outcome == MatchOutcome::kAccepted) {
+    tracker_.onAccepted(report->stamp_s, report->pose, planarCovariance(report->covariance),
+                        report->prior);
+  } else if (report->outcome == MatchOutcome::kRejected) {
+    tracker_.onRejected();
+  }
+  return true;
+}
+
+double MatchSessionState::checkScanStamp(double stamp_s) {
+  double jump = 0.0;
+  if (have_last_scan_ && stamp_s < last_scan_stamp_s_ - options_.time_backwards_tolerance_s) {
+    jump = last_scan_stamp_s_ - stamp_s;
+    tracker_.reset();
+    ++epoch_;
+    ++resets_;
+    if (options_.configured_pose_on_reset) armConfiguredPose();
+  }
+  have_last_scan_ = true;
+  last_scan_stamp_s_ = stamp_s;
+  return jump;
+}
+
+void MatchSessionState::armConfiguredPose() {
+  if (!configured_pose_) return;
+  tracker_.setExplicitPose(*configured_pose_, NAN, PriorSource::kConfigured, configured_z_known_,
+                           configured_window_ ? &*configured_window_ : nullptr);
+}
+
+}  // namespace gmm_localization

@@ -1,0 +1,277 @@
+// MatchSession (core/localization/match_session.h), the session rules the matcher nodelet and
+// LocalizerPipeline share, on synthetic inputs: time going backwards resets the tracker and
+// re-arms the configured pose, the epoch discards a result begun before the reset, the scan
+// queue drops its oldest entry at capacity (checked against a reference model on a seeded random
+// sequence), and accepted / rejected outcomes drive the prior tracker.
+
+#include "gmm_localization/core/localization/match_session.h"
+
+#include <cmath>
+#include <deque>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "gmm_localization/core/common/types.h"
+
+namespace gmm_localization {
+namespace {
+
+Pose6 poseAt(double x, double y, double yaw) {
+  Pose6 p;
+  p.x = x;
+  p.y = y;
+  p.yaw = yaw;
+  return p;
+}
+
+ScanInput scanAt(double stamp_s) {
+  ScanInput s;
+  s.stamp_s = stamp_s;
+  s.points.assign(10, Eigen::Vector3f(1.f, 2.f, 0.f));
+  s.time_s.assign(10, 0.05f);
+  return s;
+}
+
+/// What MatchProcessor reports for an accepted match at the prior's pose moved by (dx, dy).
+MatchReport acceptedReport(const ScanInput& scan, const MatchStart& start, double dx, double dy) {
+  MatchReport r;
+  r.stamp_s = scan.stamp_s;
+  r.outcome = MatchOutcome::kAccepted;
+  r.prior = start.prior;
+  r.pose = start.prior.pose;
+  r.pose.x += dx;
+  r.pose.y += dy;
+  Eigen::Matrix3d planar = Eigen::Vector3d(0.04, 0.09, 1e-4).asDiagonal();
+  planar(0, 1) = planar(1, 0) = 0.01;
+  r.covariance = poseCovarianceFromPlanar(planar);
+  r.covariance(2, 2) = r.covariance(3, 3) = r.covariance(4, 4) = 0.5;
+  return r;
+}
+
+MatchReport reportWith(const ScanInput& scan, const MatchStart& start, MatchOutcome outcome) {
+  MatchReport r;
+  r.stamp_s = scan.stamp_s;
+  r.outcome = outcome;
+  r.prior = start.prior;
+  r.reason = outcome == MatchOutcome::kAccepted ? "" : "synthetic";
+  return r;
+}
+
+using Session = MatchSession<int>;
+
+TEST(MatchSessionOptions, ValidateNamesTheKey) {
+  MatchSessionOptions o;
+  EXPECT_EQ(o.validate(), "");
+  o.scan_queue_size = 0;
+  EXPECT_NE(o.validate().find("scan_queue_size"), std::string::npos) << o.validate();
+  o = MatchSessionOptions();
+  o.odometry_buffer_s = 0.0;
+  EXPECT_NE(o.validate().find("odometry_buffer_s"), std::string::npos) << o.validate();
+  o = MatchSessionOptions();
+  o.time_backwards_tolerance_s = NAN;
+  EXPECT_NE(o.validate().find("time_backwards_tolerance_s"), std::string::npos);
+}
+
+TEST(MatchSession, TimeGoingBackwardsResetsAndReArmsTheConfiguredPose) {
+  MatchSessionOptions o;
+  o.time_backwards_tolerance_s = 1.0;
+  Session s(o, LocalizationPolicyOptions());
+  const WindowExtent window{3.0, 3.0, 0.1};
+  const Pose6 configured = poseAt(10.0, -5.0, 0.3);
+  s.setConfiguredPose(configured, true, &window);
+
+  ASSERT_FALSE(s.arrive(100.0, 0).timeWentBackwards());
+  s.takeNext();
+  const ScanInput first = scanAt(100.0);
+  MatchStart start = s.beginMatch(first);
+  EXPECT_EQ(start.prior.source, PriorSource::kConfigured);
+  EXPECT_TRUE(start.prior.wide);
+  EXPECT_DOUBLE_EQ(start.prior.wide_window.half_x_m, 3.0);
+  EXPECT_DOUBLE_EQ(start.prior.pose.x, 10.0);
+  MatchReport r = acceptedReport(first, start, 0.5, 0.2);
+  ASSERT_TRUE(s.finishMatch(start.epoch, &r));
+  EXPECT_EQ(s.tracker().mode(), PriorMode::kTracking);
+
+  // Within the tolerance: no reset.
+  EXPECT_FALSE(s.arrive(100.5, 1).timeWentBackwards());
+  EXPECT_FALSE(s.arrive(99.6, 2).timeWentBackwards());
+  EXPECT_EQ(s.epoch(), 0u);
+  EXPECT_EQ(s.resets(), 0u);
+  EXPECT_EQ(s.tracker().mode(), PriorMode::kTracking);
+
+  // 5.1 s back from the previous scan (99.6): the state of the other timeline goes.
+  const Session::Arrival a = s.arrive(94.5, 3);
+  EXPECT_TRUE(a.timeWentBackwards());
+  EXPECT_NEAR(a.backwards_jump_s, 5.1, 1e-9);
+  EXPECT_EQ(a.dropped, 2u);  // the two scans of the old timeline still waiting
+  EXPECT_EQ(s.epoch(), 1u);
+  EXPECT_EQ(s.resets(), 1u);
+  EXPECT_EQ(s.tracker().mode(), PriorMode::kRelocalizing);
+  ASSERT_EQ(s.waiting(), 1u);
+  const Session::Next next = s.takeNext();
+  EXPECT_EQ(next.item, 3);
+  EXPECT_EQ(next.dropped_before, 2u);
+  start = s.beginMatch(scanAt(94.5));
+  EXPECT_EQ(start.prior.source, PriorSource::kConfigured);
+  EXPECT_DOUBLE_EQ(start.prior.pose.x, configured.x);
+  EXPECT_DOUBLE_EQ(start.prior.wide_window.half_x_m, 3.0);
+  EXPECT_EQ(start.epoch, 1u);
+
+  // Without configured_pose_on_reset the session waits for a prior.
+  o.configured_pose_on_reset = false;
+  Session quiet(o, LocalizationPolicyOptions());
+  quiet.setConfiguredPose(configured, true, &window);
+  quiet.arrive(100.0, 0);
+  EXPECT_TRUE(quiet.arrive(90.0, 1).timeWentBackwards());
+  EXPECT_EQ(quiet.tracker().mode(), PriorMode::kNoPrior);
+  EXPECT_FALSE(quiet.beginMatch(scanAt(90.0)).prior.valid());
+}
+
+TEST(MatchSession, TheEpochDiscardsAResultBegunBeforeTimeWentBackwards) {
+  Session s{MatchSessionOptions(), LocalizationPolicyOptions()};
+  s.setConfiguredPose(poseAt(0.0, 0.0, 0.0), true);
+  s.arrive(50.0, 0);
+  s.takeNext();
+  const ScanInput scan = scanAt(50.0);
+  const MatchStart start = s.beginMatch(scan);
+  // While it is matched, the bag loops.
+  ASSERT_TRUE(s.arrive(20.0, 1).timeWentBackwards());
+  MatchReport accepted = acceptedReport(scan, start, 0.1, 0.1);
+  EXPECT_FALSE(s.finishMatch(start.epoch, &accepted));
+  EXPECT_EQ(accepted.outcome, MatchOutcome::kSkipped);
+  EXPECT_EQ(accepted.reason, "discarded: time went backwards during the match");
+  // The tracker did not learn it: still searching the re-armed configured pose.
+  EXPECT_EQ(s.tracker().mode(), PriorMode::kRelocalizing);
+  EXPECT_EQ(s.beginMatch(scanAt(20.0)).prior.source, PriorSource::kConfigured);
+  MatchReport rejected = reportWith(scan, start, MatchOutcome::kRejected);
+  EXPECT_FALSE(s.finishMatch(start.epoch, &rejected));
+  EXPECT_EQ(s.tracker().consecutiveRejections(), 0);
+  // A match begun in the current epoch counts.
+  const MatchStart now = s.beginMatch(scanAt(20.0));
+  MatchReport fresh = acceptedReport(scanAt(20.0), now, 0.0, 0.0);
+  EXPECT_TRUE(s.finishMatch(now.epoch, &fresh));
+  EXPECT_EQ(fresh.outcome, MatchOutcome::kAccepted);
+  EXPECT_EQ(s.tracker().mode(), PriorMode::kTracking);
+}
+
+TEST(MatchSession, TheQueueDropsTheOldestAtCapacity) {
+  MatchSessionOptions o;
+  o.scan_queue_size = 3;
+  Session s(o, LocalizationPolicyOptions());
+  EXPECT_EQ(s.queueCapacity(), 3u);
+  for (int i = 0; i < 5; ++i) {
+    EXPECT_EQ(s.arrive(10.0 + 0.1 * i, i).dropped, i < 3 ? 0u : 1u) << i;
+  }
+  EXPECT_EQ(s.waiting(), 3u);
+  Session::Next n = s.takeNext();
+  EXPECT_EQ(n.item, 2);  // 0 and 1 went
+  EXPECT_EQ(n.dropped_before, 2u);
+  n = s.takeNext();
+  EXPECT_EQ(n.item, 3);
+  EXPECT_EQ(n.dropped_before, 0u);
+  EXPECT_EQ(s.droppedTotal(), 2u);
+
+  // A seeded random sequence of arrivals and takes against a reference model.
+  for (const int capacity : {1, 2, 3, 7}) {
+    o.scan_queue_size = capacity;
+    Session q(o, LocalizationPolicyOptions());
+    std::deque<int> model;
+    uint32_t model_since = 0;
+    uint64_t model_total = 0;
+    std::mt19937 rng(1234 + capacity);
+    std::bernoulli_distribution arrives(0.6);
+    double stamp = 0.0;
+    for (int step = 0, item = 0; step < 500; ++step) {
+      if (arrives(rng) || model.empty()) {
+        stamp += 0.1;
+        size_t dropped = 0;
+        if (static_cast<int>(model.size()) == capacity) {
+          model.pop_front();
+          dropped = 1;
+        }
+        model.push_back(item);
+        model_since += dropped;
+        model_total += dropped;
+        ASSERT_EQ(q.arrive(stamp, item++).dropped, dropped) << "capacity " << capacity;
+      } else {
+        ASSERT_TRUE(q.hasWaiting());
+        const Session::Next next = q.takeNext();
+        ASSERT_EQ(next.item, model.front()) << "capacity " << capacity << " step " << step;
+        ASSERT_EQ(next.dropped_before, model_since);
+        model.pop_front();
+        model_since = 0;
+      }
+      ASSERT_EQ(q.waiting(), model.size());
+    }
+    EXPECT_EQ(q.droppedTotal(), model_total);
+    EXPECT_GT(model_total, 0u);
+  }
+}
+
+TEST(MatchSession, AcceptedAndRejectedOutcomesDriveTheTracker) {
+  LocalizationPolicyOptions policy;
+  policy.relocalization.max_consecutive_rejections = 2;
+  Session s(MatchSessionOptions(), policy);
+  s.setConfiguredPose(poseAt(5.0, 5.0, 0.0), true);
+  const ScanInput a = scanAt(10.0);
+  MatchStart start = s.beginMatch(a);
+  MatchReport r = acceptedReport(a, start, 0.4, -0.3);
+  ASSERT_TRUE(s.finishMatch(start.epoch, &r));
+  EXPECT_EQ(s.tracker().mode(), PriorMode::kTracking);
+  // The next prior is the accepted match with the (x, y, yaw) block of its covariance.
+  const ScanInput b = scanAt(10.0);
+  start = s.beginMatch(b);
+  EXPECT_EQ(start.prior.source, PriorSource::kPreviousMatch);
+  EXPECT_FALSE(start.prior.wide);
+  EXPECT_NEAR(start.prior.pose.x, 5.4, 1e-9);
+  EXPECT_NEAR(start.prior.pose.y, 4.7, 1e-9);
+  EXPECT_TRUE(start.prior.covariance_xyh.isApprox(planarCovariance(r.covariance), 1e-12));
+
+  // Skipped scans (no map, no points) do not count; rejections do, up to the wide window.
+  MatchReport skipped = reportWith(b, start, MatchOutcome::kSkipped);
+  EXPECT_TRUE(s.finishMatch(start.epoch, &skipped));
+  EXPECT_EQ(s.tracker().consecutiveRejections(), 0);
+  MatchReport rejected = reportWith(b, start, MatchOutcome::kRejected);
+  EXPECT_TRUE(s.finishMatch(start.epoch, &rejected));
+  EXPECT_EQ(s.tracker().consecutiveRejections(), 1);
+  EXPECT_FALSE(s.beginMatch(b).prior.wide);
+  rejected = reportWith(b, start, MatchOutcome::kRejected);
+  EXPECT_TRUE(s.finishMatch(start.epoch, &rejected));
+  EXPECT_EQ(s.tracker().mode(), PriorMode::kRelocalizing);
+  start = s.beginMatch(b);
+  EXPECT_TRUE(start.prior.wide);
+  // An accepted match ends the relocalization.
+  r = acceptedReport(b, start, 0.0, 0.0);
+  EXPECT_TRUE(s.finishMatch(start.epoch, &r));
+  EXPECT_EQ(s.tracker().mode(), PriorMode::kTracking);
+  EXPECT_EQ(s.tracker().consecutiveRejections(), 0);
+}
+
+TEST(MatchSession, TheMatchStartsWithTheDeskewTwistWhenConfigured) {
+  MatchSessionOptions o;
+  Session s(o, LocalizationPolicyOptions());
+  OdometrySample sample;
+  for (int i = 0; i <= 10; ++i) {
+    sample.stamp_s = 10.0 + 0.02 * i;
+    sample.odom_T_base.translation() = Eigen::Vector3d(0.1 * i, 0, 0);
+    sample.linear_mps = Eigen::Vector3d(5.0, 0, 0);
+    sample.angular_radps = Eigen::Vector3d(0, 0, 0.1);
+    ASSERT_EQ(s.addOdometry(sample), OdometryBuffer::AddResult::kAdded);
+  }
+  const ScanInput scan = scanAt(10.1);
+  const MatchStart start = s.beginMatch(scan);
+  ASSERT_TRUE(start.twist.has_value());
+  EXPECT_EQ(start.twistOrNull(), &*start.twist);
+  EXPECT_DOUBLE_EQ(start.twist->linear_mps.x(), 5.0);
+  EXPECT_FALSE(start.prior.valid());  // nothing to search around yet
+
+  o.deskew = false;
+  Session off(o, LocalizationPolicyOptions());
+  off.addOdometry(sample);
+  EXPECT_FALSE(off.beginMatch(scanAt(10.2)).twist.has_value());
+  EXPECT_EQ(off.beginMatch(scanAt(10.2)).twistOrNull(), nullptr);
+}
+
+}  // namespace
+}  // namespace gmm_localization
