@@ -1,4 +1,4 @@
-# evaluate (issue 6): the paper's experiments on a localization bag (LocalizerPipeline offline,
+# evaluate: the paper's experiments on a localization bag (LocalizerPipeline offline,
 # options from the same YAML files as the nodelets, parsed with yaml-cpp) or on the recording of
 # a real replay. The library gmm_evaluate holds everything but main() so the tests can use it.
 find_package(yaml-cpp REQUIRED)

@@ -7,7 +7,7 @@
 namespace gmm_localization {
 namespace node {
 
-CloudMergerOptions loadCloudMergerOptions(const ros::NodeHandle& pnh) {
+CloudMergerOptions loadCloudMergerOptions(const ParamSource& pnh) {
   CloudMergerOptions o;
   o.input_topics = param(pnh, "input_topics", o.input_topics);
   if (o.input_topics.empty()) {

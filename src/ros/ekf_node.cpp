@@ -10,7 +10,7 @@ EkfNode::EkfNode(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& nam
     : name_(name),
       nh_(nh),
       pnh_(pnh),
-      options_(loadEkfNodeOptions(pnh)),
+      options_(loadNodeletOptions(pnh, name, loadEkfNodeOptions)),
       tf_listener_(tf_buffer_),
       imu_rate_(0.0, 1e9),
       odom_rate_(0.0, 1e9),

@@ -13,7 +13,10 @@ constexpr uint32_t kChunkQueueSize = 256;  // a full radius of chunks fits in on
 }  // namespace
 
 MapServer::MapServer(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& name)
-    : nh_(nh), pnh_(pnh), name_(name), options_(loadMapServerOptions(pnh)) {
+    : nh_(nh),
+      pnh_(pnh),
+      name_(name),
+      options_(loadNodeletOptions(pnh, name, loadMapServerOptions)) {
   // Publishers first: the engine publishes from its workers as soon as it has a position.
   ros::AdvertiseOptions chunk_ops = ros::AdvertiseOptions::create<RasterChunk>(
       "map_chunks", kChunkQueueSize,

@@ -8,6 +8,7 @@
 #include <ros/node_handle.h>
 
 #include "gmm_localization/ros/cloud_merger_sync.h"
+#include "gmm_localization/ros/params.h"
 
 namespace gmm_localization {
 namespace node {
@@ -24,7 +25,9 @@ struct CloudMergerOptions {
   int input_queue_size = 2;        ///< subscriber queue per input topic [messages]
 };
 
-CloudMergerOptions loadCloudMergerOptions(const ros::NodeHandle& pnh);
+/// Reads and validates the options through a ParamSource (params.h; the nodelet passes its
+/// private node handle). Throws ConfigError naming the key.
+CloudMergerOptions loadCloudMergerOptions(const ParamSource& pnh);
 
 }  // namespace node
 }  // namespace gmm_localization

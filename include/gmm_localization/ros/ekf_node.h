@@ -1,6 +1,6 @@
 #pragma once
-// The ekf nodelet (issue 5, item 4): LocalizationFilter (core Ekf + the shared policy,
-// core/localization_policy_filter.h) fed with the IMU, the INS twist and the matcher's poses;
+// The ekf nodelet: LocalizationFilter (core Ekf + the shared policy,
+// core/localization/localization_filter.h) fed with the IMU, the INS twist and the matcher's poses;
 // publishes the estimate and the REP-105 map->odom transform at a steady rate.
 //
 // Subscribed (relative names; remap in launch):

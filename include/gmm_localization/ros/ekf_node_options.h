@@ -2,8 +2,8 @@
 // Options of the ekf nodelet, loaded once from its private parameters (config/ekf.yaml
 // documents every key) through a ParamSource (params.h: parameter server or an in-memory tree
 // such as the YAML file `evaluate` reads offline). The EKF core keys are EkfOptions' member
-// names (core/ekf_options.h); the filter policy keys FilterPolicyOptions'
-// (core/localization_policy_filter.h).
+// names (core/filter/ekf_options.h); the filter policy keys FilterPolicyOptions'
+// (core/localization/localization_filter.h).
 
 #include <string>
 

@@ -1,6 +1,6 @@
 #pragma once
-// The map server (issue 5, item 1): serves the rasterized multiresolution map (paper IV-B)
-// around the vehicle. A thin ROS shell around ChunkEngine (map_server_engine.h), which loads the
+// The map server: serves the rasterized multiresolution map (paper IV-B) around the vehicle.
+// A thin ROS shell around ChunkEngine (core/raster/chunk_engine.h), which loads the
 // parametric tiles near the vehicle and rasterizes chunks on background threads.
 //
 // Topics (relative; remap in launch):
@@ -27,7 +27,7 @@
 // start-up in milliseconds, so that a restarted server never repeats a version.
 //
 // Vehicle position: TF map_frame -> base_frame (latest), else pose_hint, else the configured
-// initial position (map_server_planner.h, selectCentres), polled every update_period_s.
+// initial position (core/raster/chunk_planner.h, selectCentres), polled every update_period_s.
 // Diagnostics (/diagnostics): map (version, tiles, extent, tile load errors: ERROR naming the
 // tiles), chunks (held, pending, memory, rasterization times), vehicle position (source;
 // WARN when unknown or outside the map's extent).

@@ -18,7 +18,7 @@ struct MapServerOptions {
   std::string map_directory;  ///< required: a directory written by build_map
   std::string map_frame = "map";
   std::string base_frame = "base_link";
-  /// Radii, hysteresis, raster options and worker threads (map_server_engine.h).
+  /// Radii, hysteresis, raster options and worker threads (core/raster/chunk_engine.h).
   ChunkEngineOptions engine;
   double update_period_s = 0.5;  ///< vehicle position lookup and index refresh period [s]
   /// Served before any TF or pose hint exists (map frame [m]); unset: wait for a position.

@@ -7,9 +7,16 @@
 // namespace; implicit conversion, so `param(pnh, ...)` keeps working) or by a tree of XmlRpc
 // values held in memory (the offline `evaluate` tool parses the same YAML files into one), so
 // the nodelets and the tools share literally the same loaders, keys and checks.
+//
+// Unknown keys: a ParamSource records every key read through it (hasParam or getParam, also
+// through its copies and children), so that after loading, the keys present in its namespace
+// that no loader read - a typo, or an option that no longer exists, which would otherwise
+// silently take its default - can be named: unreadParams(), unknownParamWarnings(), and for
+// the nodelets loadNodeletOptions(), which warns with ROS_WARN once per such key.
 
 #include <memory>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -54,18 +61,58 @@ class ParamSource {
   /// The key's full name, for messages (server: NodeHandle::resolveName).
   std::string resolveName(const std::string& key) const;
 
+  /// The keys of parameters present in the root namespace (the one this source or the source it
+  /// was derived from with child() was made for), relative to it ("a/b/c"), sorted. Server: the
+  /// master's parameter names under the namespace (ros::NodeHandle::getParamNames; a list or a
+  /// dictionary set as one value lists its leaves); tree: the leaves of the tree (a list is one
+  /// leaf). Empty when the master cannot be reached.
+  std::vector<std::string> presentParams() const;
+  /// The keys read so far through this source, its copies and its children (hasParam and
+  /// getParam, present or not), relative to the root namespace, sorted.
+  std::vector<std::string> readParams() const;
+  /// presentParams() that were not read: neither the key itself nor a namespace or value above
+  /// it (reading "a" as one value covers "a/b"). On the server, keys that nodelet's own loader
+  /// reads in a standalone nodelet's private namespace (num_worker_threads) are not listed.
+  /// Not thread-safe with concurrent reads through the same source.
+  std::vector<std::string> unreadParams() const;
+  /// The full name of a key relative to the root namespace, for messages (server: the resolved
+  /// name, e.g. /localization/matcher/window/min_half_xy_m; tree: origin + key).
+  std::string rootName(const std::string& key) const;
+
  private:
   ParamSource() = default;
+  void recordRead(const std::string& key) const;
   /// The tree node at key (tree backend), nullptr when absent.
   const XmlRpc::XmlRpcValue* find(const std::string& key) const;
   template <typename T>
   bool get(const std::string& key, T& out) const;
 
   std::optional<ros::NodeHandle> nh_;
+  std::string root_namespace_;  ///< server: the root NodeHandle's namespace ("/a/b")
   std::shared_ptr<const XmlRpc::XmlRpcValue> tree_;
   std::string origin_;
-  std::string prefix_;  ///< namespace within the tree, "" or "a/b/"
+  std::string prefix_;  ///< namespace below the root, "" or "a/b/"
+  /// Keys read, relative to the root; shared by copies and children.
+  std::shared_ptr<std::set<std::string>> reads_ = std::make_shared<std::set<std::string>>();
 };
+
+/// One message per unreadParams() key: "unknown parameter <full name> (typo? it is ignored)".
+std::vector<std::string> unknownParamWarnings(const ParamSource& src);
+
+/// ROS_WARN "<node_name>: <message>" for each unknownParamWarnings() message.
+void warnUnknownParams(const ParamSource& src, const std::string& node_name);
+
+/// A nodelet's option loading: `load` reads pnh's namespace through one ParamSource, then
+/// warnUnknownParams() names every parameter present there that `load` did not read (once per
+/// key: the loading happens once, at start-up). Throws what `load` throws (ConfigError).
+template <typename Options>
+Options loadNodeletOptions(const ros::NodeHandle& pnh, const std::string& node_name,
+                           Options (*load)(const ParamSource&)) {
+  const ParamSource src(pnh);
+  Options options = load(src);
+  warnUnknownParams(src, node_name);
+  return options;
+}
 
 /// Conversions of one XmlRpc value (tree backend); false when the type does not fit.
 bool fromXmlRpc(const XmlRpc::XmlRpcValue& v, bool& out);

@@ -81,7 +81,7 @@ MatchReport MatchProcessor::process(const ChunkMap& map, ScanInput scan, const P
   if (!match.ok()) {
     // Off the map, too little coverage, empty after filtering: a failed attempt (counts
     // towards relocalization only when points were left to search with).
-    const bool no_points = match.error().find("no points left") != std::string::npos;
+    const bool no_points = match.errorKind() == RegistrationError::kNoPoints;
     return finish(no_points ? MatchOutcome::kSkipped : MatchOutcome::kRejected, match.error());
   }
   r.has_result = true;

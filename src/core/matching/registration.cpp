@@ -28,6 +28,28 @@ std::string RegistrationOptions::validate() const {
   return {};
 }
 
+const char* registrationErrorName(RegistrationError kind) {
+  switch (kind) {
+    case RegistrationError::kNone:
+      return "none";
+    case RegistrationError::kInvalidOptions:
+      return "invalid_options";
+    case RegistrationError::kInvalidPrior:
+      return "invalid_prior";
+    case RegistrationError::kNoPoints:
+      return "no_points";
+    case RegistrationError::kInvalidWindow:
+      return "invalid_window";
+    case RegistrationError::kOffMap:
+      return "off_map";
+    case RegistrationError::kLowCoverage:
+      return "low_coverage";
+    case RegistrationError::kNumerical:
+      return "numerical";
+  }
+  return "unknown";
+}
+
 double bestHeightOffset(const ChunkMap& map, const PointList& points, const Pose6& prior,
                         double range_m) {
   const double step = map.options().z_step_m;
@@ -93,19 +115,25 @@ double wrapAngle(double a) { return std::atan2(std::sin(a), std::cos(a)); }
 
 }  // namespace
 
-Result<PreparedSearch> Registration::prepare(const ChunkMap& map, const PointList& base_points,
-                                             const MatchRequest& request) const {
-  using R = Result<PreparedSearch>;
+RegistrationResult<PreparedSearch> Registration::prepare(const ChunkMap& map,
+                                                         const PointList& base_points,
+                                                         const MatchRequest& request) const {
+  using R = RegistrationResult<PreparedSearch>;
   const std::string invalid = options_.validate();
-  if (!invalid.empty()) return R::failure("registration options: " + invalid);
-  if (!finitePose(request.prior)) return R::failure("prior pose is not finite");
+  if (!invalid.empty()) {
+    return R::failure(RegistrationError::kInvalidOptions, "registration options: " + invalid);
+  }
+  if (!finitePose(request.prior)) {
+    return R::failure(RegistrationError::kInvalidPrior, "prior pose is not finite");
+  }
   FilteredScan f =
       filterScan(base_points, request.prior.roll, request.prior.pitch, options_.filter);
   if (f.points.empty()) {
-    return R::failure("no points left after filtering: " + std::to_string(f.input_points) +
-                      " input, " + std::to_string(f.dropped_nonfinite) + " non-finite, " +
-                      std::to_string(f.dropped_range) + " out of range, " +
-                      std::to_string(f.dropped_height) + " out of the height band");
+    return R::failure(RegistrationError::kNoPoints,
+                      "no points left after filtering: " + std::to_string(f.input_points) +
+                          " input, " + std::to_string(f.dropped_nonfinite) + " non-finite, " +
+                          std::to_string(f.dropped_range) + " out of range, " +
+                          std::to_string(f.dropped_height) + " out of the height band");
   }
   // Height pre-alignment, then the window over x, y, heading around the (raised) prior.
   Pose6 prior = request.prior;
@@ -114,20 +142,30 @@ Result<PreparedSearch> Registration::prepare(const ChunkMap& map, const PointLis
   const SearchWindow window =
       SearchWindow::fromExtent(prior, request.half_x_m, request.half_y_m, request.half_heading_rad,
                                options_.heading_step_rad, map.geometry().resolution_m);
+  // SearchProblem::create validates the window first (same message), then fails only when no
+  // chunk lies under the window (the points are not empty here): the window is checked here so
+  // that each failure gets its kind.
+  const std::string bad_window = window.validate();
+  if (!bad_window.empty()) {
+    return R::failure(RegistrationError::kInvalidWindow, "search window: " + bad_window);
+  }
   auto problem = SearchProblem::create(map, f.points, window);
-  if (!problem.ok()) return R::failure(problem.error());
+  if (!problem.ok()) return R::failure(RegistrationError::kOffMap, problem.error());
   return PreparedSearch{std::move(f), z_offset, std::move(problem.value())};
 }
 
-Result<MatchResult> Registration::match(const ChunkMap& map, const PointList& base_points,
-                                        const MatchRequest& request,
-                                        std::vector<TraversalNode>* traversal,
-                                        const std::function<double()>& now,
-                                        RegistrationTiming* timing) const {
+RegistrationResult<MatchResult> Registration::match(const ChunkMap& map,
+                                                    const PointList& base_points,
+                                                    const MatchRequest& request,
+                                                    std::vector<TraversalNode>* traversal,
+                                                    const std::function<double()>& now,
+                                                    RegistrationTiming* timing) const {
   auto tick = [&]() { return now ? now() : 0.0; };
   const double t0 = tick();
   auto prepared = prepare(map, base_points, request);
-  if (!prepared.ok()) return Result<MatchResult>::failure(prepared.error());
+  if (!prepared.ok()) {
+    return RegistrationResult<MatchResult>::failure(prepared.errorKind(), prepared.error());
+  }
   const double t1 = tick();
   // Algorithm 2 (reference) or 3 over x, y, heading.
   const SearchProblem& problem = prepared->problem;
@@ -141,12 +179,11 @@ Result<MatchResult> Registration::match(const ChunkMap& map, const PointList& ba
   return finish(map, base_points, request, std::move(prepared.value()), search, now, timing);
 }
 
-Result<MatchResult> Registration::finish(const ChunkMap& map, const PointList& base_points,
-                                         const MatchRequest& request, PreparedSearch prepared,
-                                         const SearchOutcome& search,
-                                         const std::function<double()>& now,
-                                         RegistrationTiming* timing) const {
-  using R = Result<MatchResult>;
+RegistrationResult<MatchResult> Registration::finish(
+    const ChunkMap& map, const PointList& base_points, const MatchRequest& request,
+    PreparedSearch prepared, const SearchOutcome& search, const std::function<double()>& now,
+    RegistrationTiming* timing) const {
+  using R = RegistrationResult<MatchResult>;
   auto tick = [&]() { return now ? now() : 0.0; };
   const double t2 = tick();
   MatchResult out;
@@ -195,13 +232,15 @@ Result<MatchResult> Registration::finish(const ChunkMap& map, const PointList& b
     out.map_coverage = static_cast<double>(covered) / refine_points.size();
   }
   if (out.map_coverage < options_.min_map_coverage) {
-    return R::failure("only " + std::to_string(static_cast<int>(100 * out.map_coverage)) +
-                      "% of the scan lies over mapped cells at the best pose (minimum " +
-                      std::to_string(static_cast<int>(100 * options_.min_map_coverage)) +
-                      "%): vehicle off the map or map not loaded");
+    return R::failure(RegistrationError::kLowCoverage,
+                      "only " + std::to_string(static_cast<int>(100 * out.map_coverage)) +
+                          "% of the scan lies over mapped cells at the best pose (minimum " +
+                          std::to_string(static_cast<int>(100 * options_.min_map_coverage)) +
+                          "%): vehicle off the map or map not loaded");
   }
   if (!finitePose(out.pose) || !out.covariance_xyh.allFinite()) {
-    return R::failure("numerical failure: non-finite pose or covariance");
+    return R::failure(RegistrationError::kNumerical,
+                      "numerical failure: non-finite pose or covariance");
   }
   if (options_.classify_obstacles) {
     out.obstacles = classifyObstacles(map, base_points, out.pose, options_.obstacles);

@@ -6,6 +6,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "gmm_localization/ros/map_server_options.h"
+
 namespace gmm_localization {
 namespace eval {
 namespace {
@@ -203,6 +205,29 @@ node::ParamSource yamlParamSource(const std::string& path,
     setTreeValue(tree, key, value);
   }
   return node::ParamSource::fromTree(tree, path + ":");
+}
+
+void printUnknownParams(const node::ParamSource& source, std::ostream& warn) {
+  for (const std::string& w : node::unknownParamWarnings(source)) {
+    warn << "evaluate: " << w << std::endl;
+  }
+}
+
+RasterOptions loadMapServerYamlRaster(const std::string& path, std::ostream& warn) {
+  XmlRpcValue tree = yamlFileToXmlRpc(path);
+  const RasterOptions raster =
+      node::loadRasterOptions(node::ParamSource::fromTree(tree, path + ":"));
+  if (!tree.valid() || !tree.hasMember("map_directory")) {
+    setTreeValue(tree, "map_directory", XmlRpcValue(std::string("(map given to evaluate)")));
+  }
+  const node::ParamSource server = node::ParamSource::fromTree(tree, path + ":");
+  try {
+    node::loadMapServerOptions(server);  // reads every key of the map server (a superset)
+  } catch (const ConfigError&) {
+    return raster;  // the map server would refuse the file; evaluate does not use those keys
+  }
+  printUnknownParams(server, warn);
+  return raster;
 }
 
 }  // namespace eval

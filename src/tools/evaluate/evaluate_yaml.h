@@ -11,11 +11,13 @@
 // double reports the wrong type in both). Standard tags !!str !!int !!float !!bool and
 // rosparam's !degrees / !radians are honoured. Sexagesimal numbers (1:30) are not supported.
 
+#include <iostream>
 #include <string>
 #include <vector>
 
 #include <xmlrpcpp/XmlRpcValue.h>
 
+#include "gmm_localization/core/raster/raster_options.h"
 #include "gmm_localization/ros/params.h"
 
 namespace gmm_localization {
@@ -35,6 +37,30 @@ void setTreeValue(XmlRpc::XmlRpcValue& tree, const std::string& key,
 /// on top, as a ParamSource whose names read "<path>:<key>". Throws node::ConfigError.
 node::ParamSource yamlParamSource(const std::string& path,
                                   const std::vector<std::string>& overrides = {});
+
+/// Writes "evaluate: <message>" to `warn` for each node::unknownParamWarnings() message of
+/// `source`: the keys of the file (and overrides) that no loader read through it.
+void printUnknownParams(const node::ParamSource& source, std::ostream& warn);
+
+/// Options from a YAML file (with overrides) through a nodelet's loader (e.g.
+/// node::loadMatcherOptions), then printUnknownParams() on the file: a misspelt key warns by
+/// name, as it does in the nodelet. Throws node::ConfigError.
+template <typename Options>
+Options loadYamlOptions(Options (*load)(const node::ParamSource&), const std::string& path,
+                        const std::vector<std::string>& overrides = {},
+                        std::ostream& warn = std::cerr) {
+  const node::ParamSource source = yamlParamSource(path, overrides);
+  Options options = load(source);
+  printUnknownParams(source, warn);
+  return options;
+}
+
+/// The raster keys of the map server's YAML file (node::loadRasterOptions; its errors throw
+/// node::ConfigError as before). The file's other keys are the map server's, which `evaluate`
+/// does not use: they are checked by running the map server's loader on the file (with a
+/// placeholder map_directory when it has none), so that only keys neither loader reads warn. When
+/// the map server's own checks fail on the file, no key is reported.
+RasterOptions loadMapServerYamlRaster(const std::string& path, std::ostream& warn = std::cerr);
 
 }  // namespace eval
 }  // namespace gmm_localization

@@ -1,7 +1,7 @@
 #pragma once
 // MatchProcessor: what the matcher does with one scan, ROS-free, shared by the matcher
 // nodelet's worker thread and by LocalizerPipeline: deskew with the INS twist, size the window
-// from the prior (localization_policy.h), run Registration::match (paper Algorithm 1), apply
+// from the prior (match_policy.h), run Registration::match (paper Algorithm 1), apply
 // the acceptance rules and compute the covariance to publish. Its MatchReport carries every
 // field of gmm_localization/MatchStatus.
 //

@@ -6,6 +6,7 @@
 
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "gmm_localization/core/common/result.h"
@@ -70,31 +71,64 @@ struct PreparedSearch {
   SearchProblem problem;
 };
 
+/// Why a registration produced no pose. Callers decide on the kind, never on the message text
+/// (the messages are for people and may change).
+enum class RegistrationError {
+  kNone,            ///< no failure (the result holds a pose)
+  kInvalidOptions,  ///< RegistrationOptions::validate() failed
+  kInvalidPrior,    ///< the request's prior pose is not finite
+  kNoPoints,        ///< no points left after filtering: nothing to search with
+  kInvalidWindow,   ///< the request's search window is invalid (SearchWindow::validate)
+  kOffMap,          ///< no rasterized map chunk under the scan anywhere in the search window
+  kLowCoverage,     ///< too little of the scan over mapped cells at the best pose
+  kNumerical,       ///< non-finite pose or covariance
+};
+const char* registrationErrorName(RegistrationError kind);  ///< "no_points", "off_map", ...
+
+/// A Result<T> (value or reason) that also carries the failure's kind. It converts to Result<T>
+/// (the kind is then dropped), so callers that only need the reason keep using Result<T>.
+template <typename T>
+class RegistrationResult : public Result<T> {
+ public:
+  RegistrationResult(T value) : Result<T>(std::move(value)) {}  // NOLINT: implicit on purpose
+  static RegistrationResult failure(RegistrationError kind, std::string reason) {
+    return RegistrationResult(Result<T>::failure(std::move(reason)), kind);
+  }
+  /// kNone when ok(); otherwise never kNone.
+  RegistrationError errorKind() const { return kind_; }
+
+ private:
+  RegistrationResult(Result<T> base, RegistrationError kind)
+      : Result<T>(std::move(base)), kind_(kind) {}
+  RegistrationError kind_ = RegistrationError::kNone;
+};
+
 class Registration {
  public:
   explicit Registration(const RegistrationOptions& options) : options_(options) {}
   const RegistrationOptions& options() const { return options_; }
 
-  /// Registers `base_points` (base_link frame [m]) against `map`. Fails with a reason, never
-  /// with a pose, for: invalid options or request, no points after filtering, scan off the
-  /// loaded map, too little map coverage at the result, or a non-finite result.
+  /// Registers `base_points` (base_link frame [m]) against `map`. Fails with a reason and its
+  /// kind, never with a pose, for: invalid options or request, no points after filtering, scan
+  /// off the loaded map, too little map coverage at the result, or a non-finite result.
   /// `traversal` receives the branch-and-bound's scored nodes (Fig. 9); `now` (seconds, any
   /// epoch) enables `timing`.
-  Result<MatchResult> match(const ChunkMap& map, const PointList& base_points,
-                            const MatchRequest& request,
-                            std::vector<TraversalNode>* traversal = nullptr,
-                            const std::function<double()>& now = nullptr,
-                            RegistrationTiming* timing = nullptr) const;
+  RegistrationResult<MatchResult> match(const ChunkMap& map, const PointList& base_points,
+                                        const MatchRequest& request,
+                                        std::vector<TraversalNode>* traversal = nullptr,
+                                        const std::function<double()>& now = nullptr,
+                                        RegistrationTiming* timing = nullptr) const;
 
   /// The stages of match(), for tools that time or compare them (the benchmark runs both
   /// searches on one prepared problem). Same failures as match().
-  Result<PreparedSearch> prepare(const ChunkMap& map, const PointList& base_points,
-                                 const MatchRequest& request) const;
+  RegistrationResult<PreparedSearch> prepare(const ChunkMap& map, const PointList& base_points,
+                                             const MatchRequest& request) const;
   /// Refinement, covariance, coverage check and obstacles after a search of `prepared`.
-  Result<MatchResult> finish(const ChunkMap& map, const PointList& base_points,
-                             const MatchRequest& request, PreparedSearch prepared,
-                             const SearchOutcome& search, const std::function<double()>& now,
-                             RegistrationTiming* timing) const;
+  RegistrationResult<MatchResult> finish(const ChunkMap& map, const PointList& base_points,
+                                         const MatchRequest& request, PreparedSearch prepared,
+                                         const SearchOutcome& search,
+                                         const std::function<double()>& now,
+                                         RegistrationTiming* timing) const;
 
  private:
   RegistrationOptions options_;

@@ -1,0 +1,146 @@
+// Registration failures carry their kind (RegistrationError) beside the unchanged message, and
+// MatchProcessor decides "skipped" (nothing to search with) against "rejected" on the kind.
+
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "gmm_localization/core/localization/match_processor.h"
+#include "gmm_localization/core/matching/registration.h"
+#include "gmm_localization/core/raster/rasterizer.h"
+#include "support/synthetic_world.h"
+
+namespace gmm_localization {
+namespace {
+
+class RegistrationErrorTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    world_ = std::make_unique<testing::SyntheticWorld>(42);
+    MapGeometry g;
+    g.resolution_m = 0.2;
+    g.tile_size_cells = 128;
+    gmm_ = std::make_unique<GmmMap>(world_->buildMap(g, 1));
+    RasterOptions o;
+    chunks_ = std::make_unique<ChunkMap>(g, o);
+    for (int cy = -4; cy <= 3; ++cy) {
+      for (int cx = -4; cx <= 3; ++cx) chunks_->insert(rasterizeChunk(*gmm_, {cx, cy}, o).value());
+    }
+    std::mt19937 rng(5);
+    truth_ = world_->streetPose(rng);
+    scan_ = world_->scan(truth_, 30.0, 0.3, 0.0, 1);
+  }
+  static void TearDownTestSuite() {
+    chunks_.reset();
+    gmm_.reset();
+    world_.reset();
+  }
+  static MatchRequest request() {
+    MatchRequest req;
+    req.prior = truth_;
+    req.half_x_m = req.half_y_m = 1.0;
+    req.half_heading_rad = 0.02;
+    return req;
+  }
+  static std::unique_ptr<testing::SyntheticWorld> world_;
+  static std::unique_ptr<GmmMap> gmm_;
+  static std::unique_ptr<ChunkMap> chunks_;
+  static Pose6 truth_;
+  static PointList scan_;
+};
+std::unique_ptr<testing::SyntheticWorld> RegistrationErrorTest::world_;
+std::unique_ptr<GmmMap> RegistrationErrorTest::gmm_;
+std::unique_ptr<ChunkMap> RegistrationErrorTest::chunks_;
+Pose6 RegistrationErrorTest::truth_;
+PointList RegistrationErrorTest::scan_;
+
+TEST_F(RegistrationErrorTest, EachFailureHasItsKindAndItsMessage) {
+  const Registration reg{RegistrationOptions()};
+  const auto ok = reg.match(*chunks_, scan_, request());
+  ASSERT_TRUE(ok.ok()) << ok.error();
+  EXPECT_EQ(ok.errorKind(), RegistrationError::kNone);
+
+  const PointList nans(500, Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN()));
+  const auto none = reg.match(*chunks_, nans, request());
+  ASSERT_FALSE(none.ok());
+  EXPECT_EQ(none.errorKind(), RegistrationError::kNoPoints) << none.error();
+  EXPECT_EQ(none.error().rfind("no points left after filtering: 500 input, 500 non-finite", 0), 0u)
+      << none.error();
+  EXPECT_EQ(reg.match(*chunks_, {}, request()).errorKind(), RegistrationError::kNoPoints);
+  EXPECT_EQ(reg.prepare(*chunks_, {}, request()).errorKind(), RegistrationError::kNoPoints);
+
+  MatchRequest far = request();
+  far.prior.x += 10000.0;
+  const auto off = reg.match(*chunks_, scan_, far);
+  EXPECT_EQ(off.errorKind(), RegistrationError::kOffMap);
+  EXPECT_EQ(off.error().rfind("off the map", 0), 0u) << off.error();
+
+  MatchRequest nan_prior = request();
+  nan_prior.prior.yaw = std::numeric_limits<double>::quiet_NaN();
+  const auto bad_prior = reg.match(*chunks_, scan_, nan_prior);
+  EXPECT_EQ(bad_prior.errorKind(), RegistrationError::kInvalidPrior);
+  EXPECT_EQ(bad_prior.error(), "prior pose is not finite");
+
+  MatchRequest negative = request();
+  negative.half_x_m = -1.0;
+  const auto bad_window = reg.match(*chunks_, scan_, negative);
+  EXPECT_EQ(bad_window.errorKind(), RegistrationError::kInvalidWindow);
+  EXPECT_EQ(bad_window.error().rfind("search window: window half sizes", 0), 0u)
+      << bad_window.error();
+
+  RegistrationOptions invalid;
+  invalid.heading_step_rad = 0.0;
+  const auto bad_options = Registration(invalid).match(*chunks_, scan_, request());
+  EXPECT_EQ(bad_options.errorKind(), RegistrationError::kInvalidOptions);
+  EXPECT_EQ(bad_options.error().rfind("registration options: heading_step_rad", 0), 0u)
+      << bad_options.error();
+
+  // Coverage: a scan twice as large as the world around it cannot lie over mapped cells.
+  RegistrationOptions strict;
+  strict.min_map_coverage = 1.0;
+  PointList wide = scan_;
+  for (Eigen::Vector3f& p : wide) p.head<2>() *= 4.0f;
+  const auto low = Registration(strict).match(*chunks_, wide, request());
+  ASSERT_FALSE(low.ok());
+  EXPECT_EQ(low.errorKind(), RegistrationError::kLowCoverage) << low.error();
+  EXPECT_NE(low.error().find("% of the scan lies over mapped cells"), std::string::npos)
+      << low.error();
+
+  // The kind survives a conversion to the plain Result (the message does).
+  const Result<MatchResult> plain = off;
+  EXPECT_EQ(plain.error(), off.error());
+  EXPECT_STREQ(registrationErrorName(RegistrationError::kNoPoints), "no_points");
+}
+
+TEST_F(RegistrationErrorTest, MatchProcessorSkipsOnNoPointsAndRejectsOtherFailures) {
+  auto processor = MatchProcessor::create(RegistrationOptions(), LocalizationPolicyOptions());
+  ASSERT_TRUE(processor.ok()) << processor.error();
+  Prior prior;
+  prior.pose = truth_;
+  prior.covariance_xyh = Eigen::Matrix3d::Identity() * 0.01;
+  prior.source = PriorSource::kEkf;
+  ASSERT_TRUE(prior.valid());
+
+  // Every point finite but outside the range band: registration has no points left.
+  ScanInput close;
+  close.stamp_s = 1.0;
+  close.points = PointList(200, Eigen::Vector3f(0.5f, 0.0f, 0.0f));
+  const MatchReport skipped = processor->process(*chunks_, close, prior, nullptr, false);
+  EXPECT_EQ(skipped.outcome, MatchOutcome::kSkipped) << skipped.reason;
+  EXPECT_EQ(skipped.reason.rfind("no points left after filtering", 0), 0u) << skipped.reason;
+
+  Prior far = prior;
+  far.pose.x += 10000.0;
+  ScanInput scan;
+  scan.stamp_s = 1.0;
+  scan.points = scan_;
+  const MatchReport rejected = processor->process(*chunks_, scan, far, nullptr, false);
+  EXPECT_EQ(rejected.outcome, MatchOutcome::kRejected) << rejected.reason;
+  EXPECT_EQ(rejected.reason.rfind("off the map", 0), 0u) << rejected.reason;
+}
+
+}  // namespace
+}  // namespace gmm_localization
