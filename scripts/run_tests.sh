@@ -6,6 +6,7 @@ set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/env.sh"
 "$GMM_REPO/scripts/install_deps.sh"
 "$GMM_REPO/scripts/check_core_deps.sh"
+"$GMM_REPO/scripts/test_check_core_deps.sh"
 "$GMM_REPO/scripts/check_format.sh"
 "$GMM_REPO/scripts/build.sh"
 "$GMM_REPO/scripts/build.sh" tests
