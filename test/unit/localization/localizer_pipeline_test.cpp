@@ -18,6 +18,7 @@
 
 #include "gmm_localization/core/common/types.h"
 #include "gmm_localization/core/raster/rasterizer.h"
+#include "support/street_map.h"
 #include "support/synthetic_world.h"
 
 namespace gmm_localization {
@@ -34,16 +35,8 @@ class LocalizerPipelineTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     world_ = std::make_unique<testing::SyntheticWorld>(42);
-    MapGeometry g;
-    g.resolution_m = 0.2;
-    g.tile_size_cells = 128;
-    const GmmMap gmm = world_->buildMap(g, 1);
-    RasterOptions o;
-    auto chunks = std::make_shared<ChunkMap>(g, o);
-    for (int cy = -4; cy <= 3; ++cy) {
-      for (int cx = -4; cx <= 3; ++cx) chunks->insert(rasterizeChunk(gmm, {cx, cy}, o).value());
-    }
-    map_ = chunks;
+    const GmmMap gmm = world_->buildMap(testing::streetGeometry(), 1);
+    map_ = std::make_shared<ChunkMap>(testing::rasterizeStreet(gmm));
   }
   static void TearDownTestSuite() {
     map_.reset();

@@ -11,6 +11,7 @@
 #include "gmm_localization/core/localization/match_processor.h"
 #include "gmm_localization/core/matching/registration.h"
 #include "gmm_localization/core/raster/rasterizer.h"
+#include "support/street_map.h"
 #include "support/synthetic_world.h"
 
 namespace gmm_localization {
@@ -20,15 +21,8 @@ class RegistrationErrorTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     world_ = std::make_unique<testing::SyntheticWorld>(42);
-    MapGeometry g;
-    g.resolution_m = 0.2;
-    g.tile_size_cells = 128;
-    gmm_ = std::make_unique<GmmMap>(world_->buildMap(g, 1));
-    RasterOptions o;
-    chunks_ = std::make_unique<ChunkMap>(g, o);
-    for (int cy = -4; cy <= 3; ++cy) {
-      for (int cx = -4; cx <= 3; ++cx) chunks_->insert(rasterizeChunk(*gmm_, {cx, cy}, o).value());
-    }
+    gmm_ = std::make_unique<GmmMap>(world_->buildMap(testing::streetGeometry(), 1));
+    chunks_ = std::make_unique<ChunkMap>(testing::rasterizeStreet(*gmm_));
     std::mt19937 rng(5);
     truth_ = world_->streetPose(rng);
     scan_ = world_->scan(truth_, 30.0, 0.3, 0.0, 1);
