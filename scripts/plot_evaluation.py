@@ -179,11 +179,10 @@ def fig10(runs, path):
             ax = axes[k][col]
             if matches:
                 ax.scatter(mt, np.clip(column(matches, key), -lim, lim), s=3, color="tab:gray",
-                           alpha=0.5, label="raw matches (RMS %.1f cm)"
-                           % (100 * s["raw_matches"]["rms_" + key]))
+                           alpha=0.5, label="raw matches (RMS %s)" % cm(s["raw_matches"]["rms_" + key]))
             e = column(ekf, key)
             ax.plot(t - t0, np.clip(e, -lim, lim), color="tab:blue" if col == 0 else "tab:orange",
-                    linewidth=1.0, label="EKF (RMS %.1f cm)" % (100 * s["ekf"]["rms_" + key]))
+                    linewidth=1.0, label="EKF (RMS %s)" % cm(s["ekf"]["rms_" + key]))
             out = int(np.sum(np.abs(e) > lim))
             if out:
                 ax.plot([], [], " ", label="%d EKF samples beyond +-%.2f m (max %.2f m)"
@@ -225,7 +224,8 @@ def table1(runs, path):
                 for axis in ("rms_longitudinal_m", "rms_lateral_m"):
                     cell = cm(s[kind][axis]) if s else "-"
                     loc = s.get("ekf_localized") if s and kind == "ekf" else None
-                    if loc and loc["count"] and abs(loc[axis] - s[kind][axis]) > 0.0005:
+                    if (loc and loc["count"] and s[kind][axis] is not None
+                            and abs(loc[axis] - s[kind][axis]) > 0.0005):
                         cell += " (%s+)" % cm(loc[axis])  # without not-yet-localized samples
                     cells.append(cell)
             rates = ", ".join("%s %.1f Hz (%.0f%% of scans)" % (ds, s["match_rate_hz"],

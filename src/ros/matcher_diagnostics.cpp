@@ -1,5 +1,5 @@
 // Matcher health on /diagnostics (matcher.h): scan and match rates, accepted share, last score
-// per point, search time, window, chunks held, dropped scans, prior mode and last reason.
+// per point, certified share and last certificate, search time, window, chunks held, dropped scans, prior mode and last reason.
 #include <cmath>
 #include <cstdio>
 
@@ -26,6 +26,15 @@ void Matcher::record(const MatchReport& r, uint32_t dropped) {
   }
   recent_accepted_.push_back(r.accepted());
   while (recent_accepted_.size() > 50) recent_accepted_.pop_front();
+  if (r.accepted()) {
+    const MatchCertificate& c = r.result.certificate;
+    recent_certified_.push_back(c.certified);
+    while (recent_certified_.size() > 50) recent_certified_.pop_front();
+    certified_ += c.certified ? 1 : 0;
+    last_certificate_ = c.certified ? "certified" : certificateFailureName(c.failure);
+    last_protection_xy_m_ = c.protection_xy_m;
+    last_separation_ = c.separation_per_point;
+  }
   last_reason_ = r.accepted() ? "" : r.reason;
   if (r.has_result) last_ll_per_point_ = r.result.log_likelihood_per_point;
   if (r.outcome != MatchOutcome::kSkipped) {
@@ -64,6 +73,16 @@ void Matcher::setupDiagnostics() {
     s.add("scans processed", scans_);
     s.add("matches accepted", accepted_);
     s.add("last log-likelihood per point [nats]", fixed(last_ll_per_point_, 3));
+    size_t certified_recent = 0;
+    for (bool c : recent_certified_) certified_recent += c ? 1 : 0;
+    const double certified_share =
+        recent_certified_.empty() ? 0.0
+                                  : static_cast<double>(certified_recent) / recent_certified_.size();
+    s.add("certified share of accepted (last 50)", fixed(certified_share, 2));
+    s.add("matches certified", certified_);
+    s.add("last certificate", last_certificate_);
+    s.add("last protection level x-y [m]", fixed(last_protection_xy_m_, 2));
+    s.add("last separation [nats per point]", fixed(last_separation_, 3));
     s.add("last search time [ms]", fixed(last_search_ms_, 1));
     s.add("last total time [ms]", fixed(last_total_ms_, 1));
     s.add("window half x, y [m], heading [deg]",
@@ -83,6 +102,10 @@ void Matcher::setupDiagnostics() {
       s.summary(diagnostic_msgs::DiagnosticStatus::WARN, "no prior: waiting for an initial pose");
     } else if (recent_accepted_.size() >= 5 && share < options_.min_accepted_share) {
       s.summary(diagnostic_msgs::DiagnosticStatus::WARN, "few matches accepted: " + last_reason_);
+    } else if (recent_certified_.size() >= 5 && certified_share < options_.min_accepted_share) {
+      s.summary(diagnostic_msgs::DiagnosticStatus::WARN,
+                "few matches certified (ambiguous surroundings or a wrong prior): " +
+                    last_certificate_);
     }
   });
 }

@@ -47,6 +47,17 @@ RegistrationOptions loadRegistrationOptions(const ParamSource& parent) {
   c.edge_mass_limit = param(nh, "covariance/edge_mass_limit", c.edge_mass_limit, 1e-6, 1.0);
   c.max_points = static_cast<size_t>(
       param(nh, "covariance/max_points", static_cast<int>(c.max_points), 0, 1000000));
+  CertificateOptions& ce = o.certificate;
+  ce.enabled = param(nh, "certificate/enabled", ce.enabled);
+  ce.exclusion_radius_m =
+      param(nh, "certificate/exclusion_radius_m", ce.exclusion_radius_m, 1e-3, 1e4);
+  ce.exclusion_heading_rad =
+      param(nh, "certificate/exclusion_heading_rad", ce.exclusion_heading_rad, 1e-4, 3.15);
+  ce.margin_per_point = param(nh, "certificate/margin_per_point", ce.margin_per_point, 0.0, 100.0);
+  ce.separation_depth_per_point = param(nh, "certificate/separation_depth_per_point",
+                                        ce.separation_depth_per_point, 0.0, 100.0);
+  ce.max_evaluations = static_cast<int64_t>(param(
+      nh, "certificate/max_evaluations", static_cast<int>(ce.max_evaluations), 1, 100000000));
   o.classify_obstacles = param(nh, "classify_obstacles", o.classify_obstacles);
   o.obstacles.mahalanobis_threshold =
       param(nh, "obstacles/mahalanobis_threshold", o.obstacles.mahalanobis_threshold, 0.0, 1000.0);
@@ -76,6 +87,7 @@ LocalizationPolicyOptions loadLocalizationPolicyOptions(const ParamSource& nh) {
   a.max_sigma_xy_m = param(nh, "acceptance/max_sigma_xy_m", a.max_sigma_xy_m, 0.0, 1000.0);
   a.max_sigma_yaw_rad = param(nh, "acceptance/max_sigma_yaw_rad", a.max_sigma_yaw_rad, 0.0, 10.0);
   a.reject_on_window_edge = param(nh, "acceptance/reject_on_window_edge", a.reject_on_window_edge);
+  a.require_certificate = param(nh, "acceptance/require_certificate", a.require_certificate);
   PoseCovariancePolicyOptions& c = o.covariance;
   c.use_search_covariance = param(nh, "covariance/use_search_covariance", c.use_search_covariance);
   c.search_covariance_scale =
@@ -88,6 +100,10 @@ LocalizationPolicyOptions loadLocalizationPolicyOptions(const ParamSource& nh) {
   c.sigma_z_m = param(nh, "covariance/sigma_z_m", c.sigma_z_m, 1e-4, 100.0);
   c.sigma_roll_pitch_rad =
       param(nh, "covariance/sigma_roll_pitch_rad", c.sigma_roll_pitch_rad, 1e-5, 3.2);
+  c.uncertified_min_sigma_xy_m = param(nh, "covariance/uncertified_min_sigma_xy_m",
+                                       c.uncertified_min_sigma_xy_m, 1e-4, 1000.0);
+  c.uncertified_min_sigma_yaw_rad = param(nh, "covariance/uncertified_min_sigma_yaw_rad",
+                                          c.uncertified_min_sigma_yaw_rad, 1e-5, 3.2);
   RelocalizationPolicyOptions& r = o.relocalization;
   r.max_consecutive_rejections = param(nh, "relocalization/max_consecutive_rejections",
                                        r.max_consecutive_rejections, 1, 1000000);

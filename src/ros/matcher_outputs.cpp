@@ -54,6 +54,15 @@ void toStatusMsg(const MatchReport& r, const std::string& map_frame, double late
   msg.z_offset_m = r.has_result ? safe(r.result.z_offset_m) : 0.0;
   msg.correction_xy_m = safe(r.correction_xy_m);
   msg.correction_yaw_rad = safe(r.correction_yaw_rad);
+  const MatchCertificate& cert = r.result.certificate;
+  msg.certified = r.has_result && cert.certified;
+  msg.certificate_failure = r.has_result ? certificateFailureName(cert.failure) : "";
+  msg.separation_per_point = r.has_result ? safe(cert.separation_per_point) : 0.0;
+  msg.separation_exact = r.has_result && cert.separation_exact;
+  msg.protection_xy_m = r.has_result ? safe(r.result.protection_xy_m) : 0.0;
+  msg.protection_heading_rad = r.has_result ? safe(r.result.protection_heading_rad) : 0.0;
+  msg.certificate_evaluations = r.has_result ? static_cast<uint64_t>(cert.evaluations) : 0;
+  msg.certificate_ms = 1e3 * safe(r.timing.certificate_s);
   msg.filter_ms = 1e3 * safe(r.timing.filter_s);
   msg.search_ms = 1e3 * safe(r.timing.search_s);
   msg.refine_ms = 1e3 * safe(r.timing.refine_s + r.timing.covariance_s);

@@ -63,6 +63,20 @@ TEST(MatcherOutputs, StatusOfAnAcceptedAndARejectedScan) {
   EXPECT_EQ(s.obstacle_points, 3u);
   EXPECT_NEAR(s.pose.pose.position.x, 1.0, 1e-12);
   EXPECT_DOUBLE_EQ(s.pose.covariance[1], 0.002);
+  EXPECT_FALSE(s.certified);  // a default certificate: disabled
+  EXPECT_EQ(s.certificate_failure, "disabled");
+  MatchReport certified = acceptedReport();
+  certified.result.certificate.certified = true;
+  certified.result.certificate.failure = CertificateFailure::kNone;
+  certified.result.certificate.separation_per_point = 0.3;
+  certified.result.protection_xy_m = 0.35;
+  certified.result.protection_heading_rad = kNaN;
+  toStatusMsg(certified, "map", 0.12, 2, s);
+  EXPECT_TRUE(s.certified);
+  EXPECT_EQ(s.certificate_failure, "");
+  EXPECT_DOUBLE_EQ(s.separation_per_point, 0.3);
+  EXPECT_DOUBLE_EQ(s.protection_xy_m, 0.35);
+  EXPECT_EQ(s.protection_heading_rad, 0.0);  // never NaN in a status
 
   MatchReport rejected = acceptedReport();
   rejected.outcome = MatchOutcome::kRejected;

@@ -117,6 +117,10 @@ class Matcher {
   std::mutex stats_mutex_;
   FrequencyMonitor scan_rate_, match_rate_;
   std::deque<bool> recent_accepted_;
+  std::deque<bool> recent_certified_;  ///< of the accepted matches
+  uint64_t certified_ = 0;
+  std::string last_certificate_;
+  double last_protection_xy_m_ = 0.0, last_separation_ = 0.0;
   uint64_t scans_ = 0, accepted_ = 0, time_resets_ = 0, bad_clouds_ = 0;
   std::string last_reason_;
   double last_ll_per_point_ = 0.0, last_search_ms_ = 0.0, last_total_ms_ = 0.0;

@@ -74,7 +74,11 @@ std::string PoseCovariancePolicyOptions::validate() const {
       rangeProblem("covariance.min_sigma_xy_m", min_sigma_xy_m, 1e-4, 100.0),
       rangeProblem("covariance.min_sigma_yaw_rad", min_sigma_yaw_rad, 1e-5, 3.2),
       rangeProblem("covariance.sigma_z_m", sigma_z_m, 1e-4, 100.0),
-      rangeProblem("covariance.sigma_roll_pitch_rad", sigma_roll_pitch_rad, 1e-5, 3.2));
+      rangeProblem("covariance.sigma_roll_pitch_rad", sigma_roll_pitch_rad, 1e-5, 3.2),
+      rangeProblem("covariance.uncertified_min_sigma_xy_m", uncertified_min_sigma_xy_m, 1e-4,
+                   1000.0),
+      rangeProblem("covariance.uncertified_min_sigma_yaw_rad", uncertified_min_sigma_yaw_rad, 1e-5,
+                   3.2));
 }
 
 std::string RelocalizationPolicyOptions::validate() const {
@@ -174,12 +178,16 @@ AcceptanceDecision acceptMatch(const MatchResult& r, const SearchWindow& window,
       return d;
     }
   }
+  if (o.require_certificate && !r.certificate.certified) {
+    d.reason = std::string("uncertified: ") + certificateFailureName(r.certificate.failure);
+    return d;
+  }
   d.accepted = true;
   return d;
 }
 
 Matrix6d publishedPoseCovariance(const Eigen::Matrix3d& search,
-                                 const PoseCovariancePolicyOptions& o) {
+                                 const PoseCovariancePolicyOptions& o, bool certified) {
   Eigen::Matrix3d xyh = Eigen::Matrix3d::Zero();
   const bool usable = o.use_search_covariance && search.allFinite();
   if (usable) {
@@ -190,7 +198,11 @@ Matrix6d publishedPoseCovariance(const Eigen::Matrix3d& search,
   }
   // Floors: raise a too small diagonal entry, scaling its correlations so the matrix stays
   // positive semi-definite (D^T C D with D >= 1), then make sure it is positive definite.
-  const double floors[3] = {o.min_sigma_xy_m, o.min_sigma_xy_m, o.min_sigma_yaw_rad};
+  const double min_xy =
+      certified ? o.min_sigma_xy_m : std::max(o.min_sigma_xy_m, o.uncertified_min_sigma_xy_m);
+  const double min_yaw = certified ? o.min_sigma_yaw_rad
+                                   : std::max(o.min_sigma_yaw_rad, o.uncertified_min_sigma_yaw_rad);
+  const double floors[3] = {min_xy, min_xy, min_yaw};
   Eigen::Vector3d scale = Eigen::Vector3d::Ones();
   for (int i = 0; i < 3; ++i) {
     const double var = xyh(i, i);

@@ -75,6 +75,8 @@ MatchReport MatchProcessor::process(const ChunkMap& map, ScanInput scan, const P
   request.half_x_m = r.window.half_x_m;
   request.half_y_m = r.window.half_y_m;
   request.half_heading_rad = r.window.half_heading_rad;
+  request.has_reference = scan.has_reference;
+  request.reference = scan.reference;
   const Registration& registration = prior.z_known ? tracking_ : unknown_z_;
   std::vector<TraversalNode>* traversal = want_traversal ? &r.traversal : nullptr;
   auto match = registration.match(map, scan.points, request, traversal, now, &r.timing);
@@ -100,7 +102,10 @@ MatchReport MatchProcessor::process(const ChunkMap& map, ScanInput scan, const P
   const AcceptanceDecision d = acceptMatch(m, r.search_window, policy_.acceptance);
   if (!d.accepted) return finish(MatchOutcome::kRejected, d.reason);
   r.pose = m.pose;
-  r.covariance = publishedPoseCovariance(m.covariance_xyh, policy_.covariance);
+  // A certificate switched off proves nothing either way: the covariance stays as it was.
+  const bool certified =
+      m.certificate.certified || m.certificate.failure == CertificateFailure::kDisabled;
+  r.covariance = publishedPoseCovariance(m.covariance_xyh, policy_.covariance, certified);
   if (!r.covariance.allFinite()) {
     return finish(MatchOutcome::kRejected, "numerical failure: non-finite covariance");
   }

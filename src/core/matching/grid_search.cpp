@@ -109,8 +109,9 @@ SearchOutcome branchAndBoundSearch(const SearchProblem& problem,
   // points, then queued in (heading, ty, tx) order.
   const int stride = 1 << top;
   const int nx = (w.sizeX() + stride - 1) / stride, ny = (w.sizeY() + stride - 1) / stride;
-  std::vector<int64_t> top_scores(static_cast<size_t>(nx) * ny);
+  std::vector<int64_t> all_top(static_cast<size_t>(nx) * ny * w.sizeH());
   for (int j = 0; j < w.sizeH(); ++j) {
+    int64_t* top_scores = all_top.data() + static_cast<size_t>(j) * nx * ny;
     for (int by = 0; by < ny; by += 2) {
       for (int bx = 0; bx < nx; bx += 2) {
         int64_t quad[4];
@@ -135,7 +136,9 @@ SearchOutcome branchAndBoundSearch(const SearchProblem& problem,
     const Node n = queue.top();
     queue.pop();
     if (n.layer == 0) {
-      return makeOutcome(problem, n.heading_index, n.tx, n.ty, n.bound, std::move(stats));
+      SearchOutcome out = makeOutcome(problem, n.heading_index, n.tx, n.ty, n.bound, std::move(stats));
+      out.top_scores = std::move(all_top);
+      return out;
     }
     // Branch into the (up to) four children at the next finer layer, scored in one pass.
     const int child = n.layer - 1;

@@ -22,6 +22,8 @@ std::string RegistrationOptions::validate() const {
   if (!e.empty()) return "hill_climb: " + e;
   e = covariance.validate();
   if (!e.empty()) return "covariance: " + e;
+  e = certificate.validate();
+  if (!e.empty()) return "certificate: " + e;
   if (!(min_map_coverage >= 0.0 && min_map_coverage <= 1.0)) {
     return "min_map_coverage must be in [0, 1]";
   }
@@ -112,6 +114,40 @@ bool finitePose(const Pose6& p) {
 }
 
 double wrapAngle(double a) { return std::atan2(std::sin(a), std::cos(a)); }
+
+/// Optimum's score minus the best score of the grid poses around `reference` (the two nearest
+/// translations per axis and the two nearest headings: the truth lies between them), per scan
+/// point; NaN when none of them is inside the window.
+double referenceDeficitPerPoint(const SearchProblem& problem, const SearchOutcome& optimum,
+                                const Pose6& reference) {
+  const SearchWindow& w = problem.window();
+  const double res = problem.map().geometry().resolution_m;
+  const double fx = (reference.x - w.prior.x) / res + w.half_x;
+  const double fy = (reference.y - w.prior.y) / res + w.half_y;
+  const double fj = wrapAngle(reference.yaw - w.prior.yaw) / w.heading_step_rad + w.half_h;
+  if (!(std::isfinite(fx) && std::isfinite(fy) && std::isfinite(fj))) {
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+  int64_t best = -1;
+  for (int dj = 0; dj < 2; ++dj) {
+    const double j = std::floor(fj) + dj;
+    if (j < 0 || j >= w.sizeH()) continue;
+    for (int dy = 0; dy < 2; ++dy) {
+      const double ty = std::floor(fy) + dy;
+      if (ty < 0 || ty >= w.sizeY()) continue;
+      for (int dx = 0; dx < 2; ++dx) {
+        const double tx = std::floor(fx) + dx;
+        if (tx < 0 || tx >= w.sizeX()) continue;
+        best = std::max(best, problem.score(static_cast<int>(j), 0, static_cast<int>(tx),
+                                            static_cast<int>(ty)));
+      }
+    }
+  }
+  if (best < 0) return std::numeric_limits<double>::quiet_NaN();
+  const ScoreQuantizer q(problem.map().options());
+  return static_cast<double>(optimum.score - best) * q.step() /
+         static_cast<double>(std::max<int64_t>(1, problem.scanPoints()));
+}
 
 }  // namespace
 
@@ -217,8 +253,23 @@ RegistrationResult<MatchResult> Registration::finish(
 
   out.covariance_detail = searchCovariance(prepared.problem, out.search, options_.covariance);
   out.covariance_xyh = out.covariance_detail.covariance;
-  double t4 = tick();
-  if (timing) timing->covariance_s = t4 - t3;
+  const double t3c = tick();
+  if (timing) timing->covariance_s = t3c - t3;
+  out.certificate = certifyOptimum(prepared.problem, out.search, options_.certificate);
+  {
+    const double res = map.geometry().resolution_m;
+    const double step = prepared.problem.window().heading_step_rad;
+    out.protection_xy_m = out.certificate.protection_xy_m + res * std::sqrt(2.0) +
+                          std::hypot(out.pose.x - out.search.pose.x, out.pose.y - out.search.pose.y);
+    out.protection_heading_rad = out.certificate.protection_heading_rad + step +
+                                 std::abs(wrapAngle(out.pose.yaw - out.search.pose.yaw));
+  }
+  if (request.has_reference) {
+    out.reference_deficit_per_point =
+        referenceDeficitPerPoint(prepared.problem, out.search, request.reference);
+  }
+  const double t4 = tick();
+  if (timing) timing->certificate_s = t4 - t3c;
 
   // Map coverage at the result: share of search points over non-empty cells.
   {

@@ -132,8 +132,9 @@ struct WindowRow {
   std::string name;
   std::vector<double> filter_ms, search_ms, filter_search_ms, total_ms, fraction, error_m,
       error_deg;
-  std::vector<double> refine_ms, covariance_ms, obstacles_ms;
-  std::vector<double> points, lookups;  // search points per heading; evaluations x points
+  std::vector<double> refine_ms, covariance_ms, obstacles_ms, certificate_ms;
+  std::vector<double> points, lookups;
+  int certified = 0, certified_wrong = 0;  // certified matches; of them outside success  // search points per heading; evaluations x points
   int success = 0, runs = 0, equal = 0, compared = 0, failures = 0;
   std::vector<double> exhaustive_ms;
 };
@@ -177,6 +178,7 @@ void runWindow(const Options& o, const ChunkMap& map, const std::vector<BenchSca
     const double t4 = now();
     row.refine_ms.push_back(timing.refine_s * 1e3);
     row.covariance_ms.push_back(timing.covariance_s * 1e3);
+    row.certificate_ms.push_back(timing.certificate_s * 1e3);
     row.obstacles_ms.push_back(timing.obstacles_s * 1e3);
     row.filter_ms.push_back((t1 - t0) * 1e3);
     row.search_ms.push_back((t2 - t1) * 1e3);
@@ -196,6 +198,10 @@ void runWindow(const Options& o, const ChunkMap& map, const std::vector<BenchSca
     row.error_m.push_back(e);
     row.error_deg.push_back(eh);
     row.success += success(e, eh);
+    if (r->certificate.certified) {
+      ++row.certified;
+      row.certified_wrong += success(e, eh) ? 0 : 1;
+    }
   }
   for (const Check& c : checks) {
     auto prepared = reg.prepare(map, scans[c.scan].points, c.request);
@@ -217,21 +223,23 @@ void printWindows(const std::vector<WindowRow>& rows) {
       "refine / covariance / obstacles ms (median) | match total ms median / p99 | evaluations, %% "
       "of exhaustive (median / max) | table "
       "lookups, millions (median / max) | equal to exhaustive | exhaustive search ms (median) | "
-      "success <0.5 m, <1 deg | error after refinement median / p99 |\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+      "success <0.5 m, <1 deg | error after refinement median / p99 | certificate ms (median) "
+      "| certified (of them wrong) |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const WindowRow& r : rows) {
     std::printf(
         "| %s | %d | %.0f | %.1f | %.1f / %.1f | %.1f / %.1f | %.1f / %.1f / %.1f | %.1f / %.1f | "
         "%.3f / %.3f | "
         "%.1f / %.1f | %d/%d "
-        "| %.0f | %d/%d (%.1f%%) | %.3f m, %.3f deg / %.3f m |\n",
+        "| %.0f | %d/%d (%.1f%%) | %.3f m, %.3f deg / %.3f m | %.1f | %d/%d (%d) |\n",
         r.name.c_str(), r.runs, median(r.points), median(r.filter_ms), median(r.search_ms),
         percentile(r.search_ms, 99), median(r.filter_search_ms), percentile(r.filter_search_ms, 99),
         median(r.refine_ms), median(r.covariance_ms), median(r.obstacles_ms), median(r.total_ms),
         percentile(r.total_ms, 99), 100 * median(r.fraction), 100 * percentile(r.fraction, 100),
         median(r.lookups) / 1e6, percentile(r.lookups, 100) / 1e6, r.equal, r.compared,
         median(r.exhaustive_ms), r.success, r.runs, 100.0 * r.success / std::max(1, r.runs),
-        median(r.error_m), median(r.error_deg), percentile(r.error_m, 99));
+        median(r.error_m), median(r.error_deg), percentile(r.error_m, 99), median(r.certificate_ms),
+        r.certified, r.runs, r.certified_wrong);
   }
 }
 

@@ -1,3 +1,4 @@
+#include "evaluate/evaluate_integrity.h"
 #include "evaluate/evaluate_localize.h"
 
 #include <chrono>
@@ -85,6 +86,10 @@ class BagRun {
     }
     ++scan_index_;
     if (!s.label.empty()) labels_[stamp] = std::move(s.label);
+    if (truth) {  // the certificate's calibration: the truth's search score
+      s.scan.has_reference = true;
+      s.scan.reference = toPose6(*truth);
+    }
     pipeline_.addScan(std::move(s.scan), c_.latency_s);
     collect();
   }
@@ -175,6 +180,8 @@ class BagRun {
       row.search_fraction = m.result.search.stats.fraction();
       row.log_likelihood_per_point = m.result.log_likelihood_per_point;
       row.map_coverage = m.result.map_coverage;
+      row.integrity = integrityOf(m.result);
+      row.integrity.certificate_ms = m.timing.certificate_s * 1000.0;
       const auto truth = truth_.at(m.stamp_s, kTruthGapS);
       if (truth) {
         row.has_pose = true;

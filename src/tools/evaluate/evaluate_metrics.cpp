@@ -55,14 +55,14 @@ VehicleFrameError vehicleFrameError(const PoseStamped2& estimate, const PoseStam
 }
 
 double rms(const std::vector<double>& v) {
-  if (v.empty()) return 0.0;
+  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();  // no data, not 0 m
   double sum = 0.0;
   for (double x : v) sum += x * x;
   return std::sqrt(sum / static_cast<double>(v.size()));
 }
 
 double meanAbs(const std::vector<double>& v) {
-  if (v.empty()) return 0.0;
+  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
   double sum = 0.0;
   for (double x : v) sum += std::abs(x);
   return sum / static_cast<double>(v.size());

@@ -58,9 +58,9 @@ struct VehicleFrameError {
 };
 VehicleFrameError vehicleFrameError(const PoseStamped2& estimate, const PoseStamped2& truth);
 
-/// Root mean square; 0 for an empty series.
+/// Root mean square; NaN for an empty series (no data is no data, not 0 m).
 double rms(const std::vector<double>& v);
-/// Mean of |v|; 0 for an empty series.
+/// Mean of |v|; NaN for an empty series.
 double meanAbs(const std::vector<double>& v);
 /// The q-quantile (q in [0, 1]) of v by linear interpolation between order statistics; NaN for
 /// an empty series.

@@ -1,3 +1,4 @@
+#include "evaluate/evaluate_integrity.h"
 #include "evaluate/evaluate_offsets.h"
 
 #include <cmath>
@@ -124,7 +125,11 @@ MatchReport searchFrom(const MatchProcessor& processor, const ChunkMap& map, con
   prior.pose.yaw = wrapAngle(prior.pose.yaw + off.dyaw_rad);
   prior.wide = true;  // the policy's wide window: the paper's 25 m x 25 m x +-15 deg
   prior.z_known = true;
-  return processor.process(map, scan, prior, twist ? &*twist : nullptr, want_traversal, clock);
+  ScanInput with_truth = scan;
+  with_truth.has_reference = true;
+  with_truth.reference = truth;
+  return processor.process(map, std::move(with_truth), prior, twist ? &*twist : nullptr,
+                           want_traversal, clock);
 }
 
 }  // namespace
@@ -155,6 +160,8 @@ void OffsetExperiment::run(Job& job) {
       row.error_yaw_rad = wrapAngle(p.yaw - job.truth.yaw);
       row.evaluations = static_cast<uint64_t>(r.result.search.stats.evaluations);
       row.search_fraction = r.result.search.stats.fraction();
+      row.integrity = integrityOf(r.result);
+      row.integrity.certificate_ms = r.timing.certificate_s * 1000.0;
     }
     row.search_ms = r.timing.search_s * 1000.0;
     row.total_ms = r.total_s * 1000.0;

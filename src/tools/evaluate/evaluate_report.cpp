@@ -27,6 +27,15 @@ std::string csvText(const std::string& s) {
   return out + "\"";
 }
 
+std::string integrityColumns(const IntegrityFields& f) {
+  std::ostringstream s;
+  s << std::setprecision(16) << (f.certified ? 1 : 0) << ',' << f.failure << ','
+    << f.protection_xy_m << ',' << f.protection_heading_rad << ',' << f.separation_per_point << ',';
+  if (std::isfinite(f.truth_deficit_per_point)) s << f.truth_deficit_per_point;  // empty: no truth
+  s << ',' << f.certificate_ms;
+  return s.str();
+}
+
 void writeEkf(const std::vector<EkfRow>& rows, const std::string& path) {
   std::ofstream f = openFile(path);
   f << "t,x,y,z,yaw,gt_x,gt_y,gt_z,gt_yaw,longitudinal_m,lateral_m,yaw_err_rad,sigma_x_m,"
@@ -45,7 +54,9 @@ void writeMatches(const std::vector<MatchRow>& rows, const std::string& path) {
   f << "stamp,outcome,reason,prior_source,wide,window_half_x_m,window_half_heading_rad,"
        "input_points,search_points,evaluations,search_fraction,log_likelihood_per_point,"
        "map_coverage,filter_ms,search_ms,refine_ms,total_ms,latency_s,dropped_before,fuse,"
-       "has_pose,x,y,yaw,longitudinal_m,lateral_m,yaw_err_rad,obst_tp,obst_fp,obst_fn,obst_tn\n";
+       "has_pose,x,y,yaw,longitudinal_m,lateral_m,yaw_err_rad,obst_tp,obst_fp,obst_fn,obst_tn,"
+       "certified,certificate_failure,protection_xy_m,protection_heading_rad,"
+       "separation_per_point,truth_deficit_per_point,certificate_ms\n";
   for (const MatchRow& r : rows) {
     f << r.stamp_s << ',' << r.outcome << ',' << csvText(r.reason) << ',' << r.prior_source << ','
       << (r.wide ? 1 : 0) << ',' << r.window_half_x_m << ',' << r.window_half_heading_rad << ','
@@ -55,20 +66,23 @@ void writeMatches(const std::vector<MatchRow>& rows, const std::string& path) {
       << r.latency_s << ',' << r.dropped_before << ',' << r.fuse << ',' << (r.has_pose ? 1 : 0)
       << ',' << r.pose.x << ',' << r.pose.y << ',' << r.pose.yaw << ',' << r.error.longitudinal_m
       << ',' << r.error.lateral_m << ',' << r.error.yaw_rad << ',' << r.obstacles.tp << ','
-      << r.obstacles.fp << ',' << r.obstacles.fn << ',' << r.obstacles.tn << '\n';
+      << r.obstacles.fp << ',' << r.obstacles.fn << ',' << r.obstacles.tn << ','
+      << integrityColumns(r.integrity) << '\n';
   }
 }
 
 void writeOffsets(const std::vector<OffsetRow>& rows, const std::string& path) {
   std::ofstream f = openFile(path);
   f << "stamp,dx_m,dy_m,offset_m,dyaw_rad,has_result,accepted,error_m,error_yaw_rad,"
-       "evaluations,search_fraction,search_ms,total_ms,reason\n";
+       "evaluations,search_fraction,search_ms,total_ms,reason,certified,certificate_failure,"
+       "protection_xy_m,protection_heading_rad,separation_per_point,truth_deficit_per_point,"
+       "certificate_ms\n";
   for (const OffsetRow& r : rows) {
     f << r.stamp_s << ',' << r.offset.dx_m << ',' << r.offset.dy_m << ',' << r.offset.distance_m()
       << ',' << r.offset.dyaw_rad << ',' << (r.has_result ? 1 : 0) << ',' << (r.accepted ? 1 : 0)
       << ',' << r.error_m << ',' << r.error_yaw_rad << ',' << r.evaluations << ','
       << r.search_fraction << ',' << r.search_ms << ',' << r.total_ms << ',' << csvText(r.reason)
-      << '\n';
+      << ',' << integrityColumns(r.integrity) << '\n';
   }
 }
 

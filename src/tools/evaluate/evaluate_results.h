@@ -23,6 +23,17 @@ struct EkfRow {
   double sigma_x_m = 0.0, sigma_y_m = 0.0, sigma_yaw_rad = 0.0;
 };
 
+/// A registration's certificate and the truth's score deficit (docs/integrity.md).
+struct IntegrityFields {
+  bool valid = false;  ///< a registration result exists
+  bool certified = false;
+  std::string failure;  ///< "" when certified
+  double protection_xy_m = 0.0, protection_heading_rad = 0.0;
+  double separation_per_point = 0.0;
+  double truth_deficit_per_point = std::numeric_limits<double>::quiet_NaN();  ///< NaN: no truth
+  double certificate_ms = 0.0;
+};
+
 /// One scan through the matcher.
 struct MatchRow {
   double stamp_s = 0.0;
@@ -43,6 +54,7 @@ struct MatchRow {
   PoseStamped2 pose;
   VehicleFrameError error;
   Confusion obstacles;  ///< this scan's classification (labelled clouds only)
+  IntegrityFields integrity;
 };
 
 /// One registration from a random offset (Fig. 8).
@@ -54,6 +66,7 @@ struct OffsetRow {
   double error_m = 0.0, error_yaw_rad = 0.0;  ///< result - truth (planar distance, heading)
   uint64_t evaluations = 0;
   double search_fraction = 0.0, search_ms = 0.0, total_ms = 0.0;
+  IntegrityFields integrity;
 };
 
 /// Obstacle classification against the simulator's labels (obstacle = label != 0).

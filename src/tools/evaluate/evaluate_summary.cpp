@@ -121,8 +121,13 @@ Summary summarizeResults(const EvaluationResults& r) {
     ++s.accepted;
     if (m.fuse == "fused") ++s.fused;
     latency.push_back(m.latency_s);
-    if (m.has_pose) raw.push_back(m.error);
+    if (m.has_pose) {
+      raw.push_back(m.error);
+      addToIntegrity(m.integrity, std::hypot(m.error.longitudinal_m, m.error.lateral_m),
+                     s.integrity_matches);
+    }
   }
+  finishIntegrity(s.integrity_matches);
   s.raw = summarize(raw);
   s.scans = r.info.scans_in_bag > 0 ? r.info.scans_in_bag : r.matches.size() + r.info.dropped_scans;
   s.match_rate_hz = r.info.duration_s > 0.0 ? s.accepted / r.info.duration_s : 0.0;
@@ -142,7 +147,9 @@ Summary summarizeResults(const EvaluationResults& r) {
       err.push_back(e);
       ms.push_back(o.search_ms);
       fraction += o.search_fraction;
+      if (o.has_result) addToIntegrity(o.integrity, o.error_m, s.integrity_offsets);
     }
+    finishIntegrity(s.integrity_offsets);
     s.offset_success = static_cast<double>(ok) / r.offsets.size();
     s.offset_accepted = static_cast<double>(accepted) / r.offsets.size();
     s.offset_error_m = quantilesOf(err);
@@ -185,7 +192,9 @@ std::string summaryJson(const EvaluationResults& r, const Summary& s) {
     << ", \"accepted\": " << num(s.offset_accepted)
     << ", \"error_m\": " << quantilesJson(s.offset_error_m)
     << ", \"search_ms\": " << quantilesJson(s.offset_search_ms)
-    << ", \"mean_search_fraction\": " << num(s.offset_mean_fraction) << "}";
+    << ", \"mean_search_fraction\": " << num(s.offset_mean_fraction) << "}"
+    << ",\n  \"integrity_matches\": " << integrityJson(s.integrity_matches)
+    << ",\n  \"integrity_offsets\": " << integrityJson(s.integrity_offsets);
   if (r.has_obstacles) {
     const ObstacleStats& ob = r.obstacles;
     o << ",\n  \"obstacles\": {\"scans\": " << ob.scans << ", \"all\": " << confusionJson(ob.all)
@@ -264,6 +273,8 @@ std::string summaryMarkdown(const EvaluationResults& r, const Summary& s) {
       << " ms, " << fixed(s.offset_mean_fraction * 100.0, 2)
       << "% of the exhaustive poses scored.\n\n";
   }
+  o << integrityMarkdown(s.integrity_matches, "accepted drive matches");
+  if (s.offset_trials > 0) o << integrityMarkdown(s.integrity_offsets, "Fig. 8 registrations");
   if (r.has_obstacles) {
     const ObstacleStats& ob = r.obstacles;
     o << "Obstacles (label != 0 is an obstacle; " << ob.scans << " accepted scans): precision "

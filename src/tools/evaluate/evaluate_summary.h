@@ -5,6 +5,7 @@
 #include <cmath>
 #include <string>
 
+#include "evaluate/evaluate_integrity.h"
 #include "evaluate/evaluate_results.h"
 
 namespace gmm_localization {
@@ -41,6 +42,9 @@ struct Summary {
   Quantiles offset_error_m;
   Quantiles offset_search_ms;
   double offset_mean_fraction = NAN;  ///< evaluations / exhaustive poses
+  // Integrity (evaluate_integrity.h)
+  IntegritySummary integrity_matches;  ///< accepted drive matches
+  IntegritySummary integrity_offsets;  ///< Fig. 8 registrations
   // Obstacles
   double obstacle_precision = NAN, obstacle_recall = NAN;
 };

@@ -51,7 +51,8 @@ TEST(EvaluateMetrics, HeadingErrorWrapsAcrossPi) {
 
 TEST(EvaluateMetrics, RmsMeanAbsAndQuantiles) {
   EXPECT_DOUBLE_EQ(rms({3.0, -4.0}), std::sqrt(12.5));
-  EXPECT_DOUBLE_EQ(rms({}), 0.0);
+  EXPECT_TRUE(std::isnan(rms({}))) << "no data is no data, not 0 m";
+  EXPECT_TRUE(std::isnan(meanAbs({})));
   EXPECT_DOUBLE_EQ(meanAbs({1.0, -3.0}), 2.0);
   EXPECT_DOUBLE_EQ(quantile({4, 1, 3, 2, 5}, 0.5), 3.0);
   EXPECT_DOUBLE_EQ(quantile({1, 2, 3, 4, 5}, 0.95), 4.8);  // 1 + 0.95 * 4 = 4.8

@@ -122,6 +122,20 @@ TEST(AcceptMatch, EachRuleRejectsWithItsReason) {
   r = goodResult();
   r.pose.x = kNaN;
   EXPECT_FALSE(acceptMatch(r, window10(), o).accepted);
+
+  // An uncertified match passes by default and is rejected, naming the failure, on request.
+  r = goodResult();
+  r.certificate.certified = false;
+  r.certificate.failure = CertificateFailure::kAmbiguous;
+  EXPECT_TRUE(acceptMatch(r, window10(), o).accepted);
+  AcceptancePolicyOptions strict = o;
+  strict.require_certificate = true;
+  d = acceptMatch(r, window10(), strict);
+  EXPECT_FALSE(d.accepted);
+  EXPECT_EQ(d.reason, "uncertified: ambiguous");
+  r.certificate.certified = true;
+  r.certificate.failure = CertificateFailure::kNone;
+  EXPECT_TRUE(acceptMatch(r, window10(), strict).accepted);
 }
 
 bool spd(const Matrix6d& c) {
@@ -163,6 +177,24 @@ TEST(PublishedPoseCovariance, SearchBlockScaledFlooredAndFixedSigmas) {
   bad(0, 0) = kNaN;
   c = publishedPoseCovariance(bad, PoseCovariancePolicyOptions());
   EXPECT_TRUE(spd(c));
+}
+
+TEST(PublishedPoseCovariance, UncertifiedMatchesGetTheUncertifiedFloors) {
+  PoseCovariancePolicyOptions o;
+  Eigen::Matrix3d s;
+  s << 0.04, 0.01, 0.0, 0.01, 0.09, 0.0, 0.0, 0.0, 1e-4;
+  const Matrix6d certified = publishedPoseCovariance(s, o, true);
+  const Matrix6d uncertified = publishedPoseCovariance(s, o, false);
+  EXPECT_TRUE(spd(uncertified));
+  EXPECT_NEAR(certified(kStateX, kStateX), 0.04, 1e-12);
+  EXPECT_NEAR(std::sqrt(uncertified(kStateX, kStateX)), o.uncertified_min_sigma_xy_m, 1e-9);
+  EXPECT_NEAR(std::sqrt(uncertified(kStateY, kStateY)), o.uncertified_min_sigma_xy_m, 1e-9);
+  EXPECT_NEAR(std::sqrt(uncertified(kStateYaw, kStateYaw)), o.uncertified_min_sigma_yaw_rad, 1e-9);
+  // z, roll and pitch are not the search's: unchanged.
+  EXPECT_EQ(certified(kStateZ, kStateZ), uncertified(kStateZ, kStateZ));
+  // A search covariance already wider than the floors stays as it is.
+  const Eigen::Matrix3d wide = Eigen::Vector3d(4.0, 4.0, 0.01).asDiagonal();
+  EXPECT_NEAR(publishedPoseCovariance(wide, o, false)(kStateX, kStateX), 4.0, 1e-12);
 }
 
 OdometrySample odomAt(double t, double vx) {

@@ -57,6 +57,10 @@ struct AcceptancePolicyOptions {
   /// Reject a discrete optimum on the border of the window in x, y or heading: the true
   /// optimum may lie outside it (the prior was too far off for its window).
   bool reject_on_window_edge = true;
+  /// Reject a match whose search optimum is not certified (match_certificate.h: another pose
+  /// of the window scores within the margin, or the proof ran out of budget). false: publish
+  /// it with the uncertified covariance floors below (the EKF then weighs it little).
+  bool require_certificate = false;
 
   std::string validate() const;
 };
@@ -75,6 +79,12 @@ struct PoseCovariancePolicyOptions {
   /// fixed [m], [rad].
   double sigma_z_m = 0.1;
   double sigma_roll_pitch_rad = 0.02;
+  /// Floors of an uncertified match's x, y and yaw standard deviations [m], [rad]: a match
+  /// the search cannot prove unique in its window is published (unless require_certificate)
+  /// with at least these, so the EKF down-weights it. Default: the certificate's exclusion
+  /// radius and heading, beyond which the search proves nothing.
+  double uncertified_min_sigma_xy_m = 0.5;
+  double uncertified_min_sigma_yaw_rad = 0.035;
 
   std::string validate() const;
 };
@@ -162,7 +172,7 @@ struct AcceptanceDecision {
 };
 
 /// Applies the acceptance rules in the order: finite result, map coverage, log-likelihood per
-/// point, search covariance, window edge. `window` is discreteWindow() of the request.
+/// point, search covariance, window edge, certificate (when required). `window` is discreteWindow() of the request.
 AcceptanceDecision acceptMatch(const MatchResult& result, const SearchWindow& window,
                                const AcceptancePolicyOptions& options);
 
@@ -170,7 +180,9 @@ AcceptanceDecision acceptMatch(const MatchResult& result, const SearchWindow& wi
 /// covariance (scaled) or the fixed sigmas, floored; z, roll, pitch from the fixed sigmas; no
 /// correlation between the two groups. Always symmetric positive definite and finite when the
 /// options are valid (a non-finite search covariance falls back to the fixed sigmas).
+/// `certified` false raises the x, y, yaw floors to the uncertified_min_* sigmas.
 Matrix6d publishedPoseCovariance(const Eigen::Matrix3d& search_covariance_xyh,
-                                 const PoseCovariancePolicyOptions& options);
+                                 const PoseCovariancePolicyOptions& options,
+                                 bool certified = true);
 
 }  // namespace gmm_localization

@@ -24,6 +24,10 @@ struct ScanInput {
   PointList points;      ///< base_link [m]; non-finite points allowed (dropped and counted)
   /// Per-point capture time relative to stamp_s [s] (empty: no deskewing), same size as points.
   std::vector<float> time_s;
+  /// Evaluation only: the ground-truth pose, whose search score deficit the result reports
+  /// (MatchResult::reference_deficit_per_point).
+  bool has_reference = false;
+  Pose6 reference;
 };
 
 /// How the scan ended, for the relocalization state machine.

@@ -34,6 +34,10 @@ struct SearchOutcome {
   int64_t score = 0;            ///< quantized base-layer score
   double log_likelihood = 0.0;  ///< score converted to nats (Eq. 1 with the floor)
   SearchStats stats;
+  /// Branch-and-bound only: the coarsest layer's node scores, index (j * ny + by) * nx + bx for
+  /// heading j and block (bx, by) of stride 2^top_layer (nx, ny blocks per axis), so that the
+  /// certificate (match_certificate.h) need not score that layer again. Empty otherwise.
+  std::vector<int64_t> top_scores;
 };
 
 /// One node the branch-and-bound scored (for the paper's Fig. 9 traversal picture).

@@ -2,9 +2,10 @@
 // Full registration, paper Algorithm 1: filter and level the scan, align its height to the map,
 // search x, y, heading exhaustively-optimally by branch-and-bound over the rasterized
 // multiresolution map, hill-climb 6-DOF on the exact likelihood, estimate the covariance from
-// the explored space, and label obstacles.
+// the explored space, certify the optimum (match_certificate.h), and label obstacles.
 
 #include <functional>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -12,6 +13,7 @@
 #include "gmm_localization/core/common/result.h"
 #include "gmm_localization/core/matching/grid_search.h"
 #include "gmm_localization/core/matching/hill_climb.h"
+#include "gmm_localization/core/matching/match_certificate.h"
 #include "gmm_localization/core/matching/match_covariance.h"
 #include "gmm_localization/core/matching/obstacle_classifier.h"
 #include "gmm_localization/core/matching/scan_filter.h"
@@ -28,6 +30,7 @@ struct RegistrationOptions {
   BranchAndBoundOptions branch_and_bound;
   HillClimbOptions hill_climb;
   CovarianceOptions covariance;
+  CertificateOptions certificate;  ///< what the search proves about the rest of its window
   bool classify_obstacles = true;
   ObstacleOptions obstacles;
   /// A match is rejected when less than this share of the search points lies over non-empty
@@ -42,6 +45,10 @@ struct MatchRequest {
   double half_x_m = 12.5;  ///< search window half extents [m]
   double half_y_m = 12.5;
   double half_heading_rad = 0.26;  ///< [rad]
+  /// Evaluation only: a pose (the ground truth) whose search score is reported as
+  /// MatchResult::reference_deficit_per_point, to calibrate the certificate's margin.
+  bool has_reference = false;
+  Pose6 reference;
 };
 
 struct MatchResult {
@@ -50,6 +57,17 @@ struct MatchResult {
   SearchOutcome search;            ///< discrete optimum and search statistics
   HillClimbOutcome refinement;
   MatchCovariance covariance_detail;
+  MatchCertificate certificate;  ///< separation and protection level of the search optimum
+  /// Protection level of the published pose: the certificate's (grid poses around the
+  /// optimum) plus a cell's diagonal (a true pose lies within one cell of a plausible grid
+  /// pose: the calibration scores the grid poses around the truth) and the refinement's shift
+  /// from the optimum, x-y [m]; heading: plus a heading step and the shift [rad].
+  double protection_xy_m = 0.0;
+  double protection_heading_rad = 0.0;
+  /// Optimum's score minus the best score of the grid poses around MatchRequest::reference
+  /// (two per axis and heading) [nats per scan point]; NaN without a reference or when it
+  /// lies outside the window.
+  double reference_deficit_per_point = std::numeric_limits<double>::quiet_NaN();
   FilteredScan filtered;                  ///< counters and the search points
   double z_offset_m = 0.0;                ///< height pre-alignment applied to the prior [m]
   double map_coverage = 0.0;              ///< share of search points over non-empty cells
@@ -60,7 +78,7 @@ struct MatchResult {
 /// Stage durations [s], filled when the caller supplies a clock (the core reads none itself).
 struct RegistrationTiming {
   double filter_s = 0;  ///< filtering, height pre-alignment, per-heading rotation
-  double search_s = 0, refine_s = 0, covariance_s = 0, obstacles_s = 0;
+  double search_s = 0, refine_s = 0, covariance_s = 0, certificate_s = 0, obstacles_s = 0;
 };
 
 /// The first stage of a match: the filtered scan, its height pre-alignment and the search

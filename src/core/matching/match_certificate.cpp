@@ -1,0 +1,233 @@
+#include "gmm_localization/core/matching/match_certificate.h"
+
+#include <algorithm>
+#include <cmath>
+#include <queue>
+#include <vector>
+
+namespace gmm_localization {
+
+std::string CertificateOptions::validate() const {
+  if (!(exclusion_radius_m > 0.0 && exclusion_radius_m < 1e4)) {
+    return "exclusion_radius_m must be in (0, 1e4)";
+  }
+  if (!(exclusion_heading_rad > 0.0 && exclusion_heading_rad <= 3.15)) {
+    return "exclusion_heading_rad must be in (0, pi]";
+  }
+  if (!(margin_per_point >= 0.0 && margin_per_point < 100.0)) {
+    return "margin_per_point must be in [0, 100)";
+  }
+  if (!(separation_depth_per_point >= margin_per_point && separation_depth_per_point < 100.0)) {
+    return "separation_depth_per_point must be in [margin_per_point, 100)";
+  }
+  if (max_evaluations < 1) return "max_evaluations must be >= 1";
+  return {};
+}
+
+const char* certificateFailureName(CertificateFailure failure) {
+  switch (failure) {
+    case CertificateFailure::kNone: return "";
+    case CertificateFailure::kDisabled: return "disabled";
+    case CertificateFailure::kAmbiguous: return "ambiguous";
+    case CertificateFailure::kWindowEdge: return "window_edge";
+    case CertificateFailure::kBudget: return "budget";
+  }
+  return "unknown";
+}
+
+namespace {
+
+struct Node {
+  int64_t bound;
+  int32_t heading_index;
+  int32_t ty;
+  int32_t tx;
+  int32_t layer;
+};
+
+/// Higher bound first; ties by the smaller (heading, ty, tx) so runs are reproducible.
+struct Lower {
+  bool operator()(const Node& a, const Node& b) const {
+    if (a.bound != b.bound) return a.bound < b.bound;
+    if (a.heading_index != b.heading_index) return a.heading_index > b.heading_index;
+    if (a.ty != b.ty) return a.ty > b.ty;
+    return a.tx > b.tx;
+  }
+};
+
+/// Where a node's block lies relative to the optimum, the exclusion zone and the window border.
+class Geometry {
+ public:
+  Geometry(const SearchProblem& problem, const SearchOutcome& optimum, const CertificateOptions& o)
+      : w_(problem.window()),
+        res_(problem.map().geometry().resolution_m),
+        ox_(optimum.tx),
+        oy_(optimum.ty),
+        oj_(optimum.heading_index),
+        r_xy_(o.exclusion_radius_m),
+        r_h_(o.exclusion_heading_rad) {}
+
+  struct Extent {
+    double max_xy_m;    ///< farthest x-y distance of a pose of the block from the optimum
+    double heading_rad; ///< heading distance (one heading per node)
+    bool inside;        ///< every pose of the block is inside the exclusion zone
+    bool border;        ///< the block holds a pose on the window's border
+  };
+
+  Extent of(const Node& n) const {
+    const int size = 1 << n.layer;
+    const int tx1 = std::min(n.tx + size - 1, w_.sizeX() - 1);
+    const int ty1 = std::min(n.ty + size - 1, w_.sizeY() - 1);
+    const double dx = std::max(std::abs(n.tx - ox_), std::abs(tx1 - ox_)) * res_;
+    const double dy = std::max(std::abs(n.ty - oy_), std::abs(ty1 - oy_)) * res_;
+    Extent e;
+    e.max_xy_m = std::hypot(dx, dy);
+    e.heading_rad = std::abs(n.heading_index - oj_) * w_.heading_step_rad;
+    e.inside = e.max_xy_m <= r_xy_ && e.heading_rad <= r_h_;
+    // An axis with one value is not searched: its border is not a border of the set.
+    e.border = (w_.sizeX() > 1 && (n.tx == 0 || tx1 == w_.sizeX() - 1)) ||
+               (w_.sizeY() > 1 && (n.ty == 0 || ty1 == w_.sizeY() - 1)) ||
+               (w_.sizeH() > 1 && (n.heading_index == 0 || n.heading_index == w_.sizeH() - 1));
+    return e;
+  }
+
+ private:
+  const SearchWindow& w_;
+  double res_;
+  int ox_, oy_, oj_;
+  double r_xy_, r_h_;
+};
+
+}  // namespace
+
+MatchCertificate certifyOptimum(const SearchProblem& problem, const SearchOutcome& optimum,
+                                const CertificateOptions& o) {
+  MatchCertificate out;
+  if (!o.enabled) return out;
+  out.failure = CertificateFailure::kNone;
+  const SearchWindow& w = problem.window();
+  const ScoreQuantizer q(problem.map().options());
+  const double per_point_to_units = static_cast<double>(problem.scanPoints()) / q.step();
+  const int64_t best = optimum.score;
+  // Deficits in score units, rounded down: a pose exactly at the margin counts as plausible.
+  const int64_t margin = static_cast<int64_t>(std::floor(o.margin_per_point * per_point_to_units));
+  const int64_t depth =
+      static_cast<int64_t>(std::floor(o.separation_depth_per_point * per_point_to_units));
+  const int64_t plausible_floor = best - margin;
+  const int64_t rival_floor = best - depth;
+  const Geometry geometry(problem, optimum, o);
+
+  bool rival_found = false;
+  int64_t rival = 0;
+  bool border = false;
+  // Can the node still change the outcome? A node matters when its bound reaches the
+  // plausible floor and it could widen the protection level or touch the border, or while the
+  // rival is unknown, when its bound reaches the rival floor and it holds poses elsewhere.
+  auto matters = [&](const Node& n, const Geometry::Extent& e) {
+    if (n.bound >= plausible_floor &&
+        (e.max_xy_m > out.protection_xy_m || e.heading_rad > out.protection_heading_rad ||
+         (e.border && !border))) {
+      return true;
+    }
+    return !rival_found && n.bound >= rival_floor && !e.inside;
+  };
+
+  std::priority_queue<Node, std::vector<Node>, Lower> queue;
+  auto offer = [&](const Node& n) {
+    if (matters(n, geometry.of(n))) queue.push(n);
+  };
+
+  // The coarsest layer, exhaustively (as the search does).
+  const int top = problem.topLayer();
+  const int stride = 1 << top;
+  // Reused from the branch-and-bound when it kept them (the same layer, the same scores).
+  const int nx = (w.sizeX() + stride - 1) / stride, ny = (w.sizeY() + stride - 1) / stride;
+  const bool reuse =
+      optimum.top_scores.size() == static_cast<size_t>(nx) * ny * w.sizeH() &&
+      optimum.stats.top_layer == top;
+  for (int j = 0; j < w.sizeH(); ++j) {
+    for (int ty = 0; ty < w.sizeY(); ty += 2 * stride) {
+      for (int tx = 0; tx < w.sizeX(); tx += 2 * stride) {
+        int64_t quad[4] = {0, 0, 0, 0};
+        if (!reuse) problem.scoreQuad(j, top, tx, ty, stride, quad);
+        for (int b = 0; b < 2; ++b) {
+          for (int a = 0; a < 2; ++a) {
+            const int cx = tx + a * stride, cy = ty + b * stride;
+            if (cx >= w.sizeX() || cy >= w.sizeY()) continue;
+            int64_t score = quad[b * 2 + a];
+            if (reuse) {
+              score = optimum.top_scores[(static_cast<size_t>(j) * ny + cy / stride) * nx +
+                                         cx / stride];
+            } else {
+              ++out.evaluations;
+            }
+            offer({score, j, cy, cx, top});
+          }
+        }
+      }
+    }
+  }
+
+  while (!queue.empty()) {
+    if (out.evaluations > o.max_evaluations) {
+      out.failure = CertificateFailure::kBudget;
+      break;
+    }
+    const Node n = queue.top();
+    queue.pop();
+    const Geometry::Extent e = geometry.of(n);
+    if (!matters(n, e)) continue;  // the protection level or the rival moved on since the push
+    if (n.layer == 0) {
+      const bool elsewhere = !e.inside;
+      if (elsewhere && !rival_found) {
+        // Best-first: no pose elsewhere scores more than the first one popped.
+        rival_found = true;
+        rival = n.bound;
+      }
+      if (n.bound >= plausible_floor) {
+        out.protection_xy_m = std::max(out.protection_xy_m, e.max_xy_m);
+        out.protection_heading_rad = std::max(out.protection_heading_rad, e.heading_rad);
+        border = border || e.border;
+        if (elsewhere) {
+          out.failure = CertificateFailure::kAmbiguous;
+          break;
+        }
+      }
+      continue;
+    }
+    const int child = n.layer - 1;
+    const int h = 1 << child;
+    int64_t scores[4];
+    problem.scoreQuad(n.heading_index, child, n.tx, n.ty, h, scores);
+    for (int b = 0; b < 2; ++b) {
+      for (int a = 0; a < 2; ++a) {
+        const int cx = n.tx + a * h, cy = n.ty + b * h;
+        if (cx >= w.sizeX() || cy >= w.sizeY()) continue;
+        ++out.evaluations;
+        offer({scores[b * 2 + a], n.heading_index, cy, cx, child});
+      }
+    }
+  }
+
+  const double units_to_per_point = q.step() / static_cast<double>(problem.scanPoints());
+  out.separation_exact = rival_found;
+  out.separation_per_point = rival_found ? static_cast<double>(best - rival) * units_to_per_point
+                                         : static_cast<double>(depth) * units_to_per_point;
+  if (out.failure == CertificateFailure::kNone && border) {
+    out.failure = CertificateFailure::kWindowEdge;
+  }
+  // The budget may run out after the rival was found and every plausible pose placed: the
+  // proof is complete when nothing left in the queue matters.
+  if (out.failure == CertificateFailure::kBudget) {
+    bool pending = false;
+    while (!queue.empty() && !pending) {
+      pending = matters(queue.top(), geometry.of(queue.top()));
+      queue.pop();
+    }
+    if (!pending) out.failure = border ? CertificateFailure::kWindowEdge : CertificateFailure::kNone;
+  }
+  out.certified = out.failure == CertificateFailure::kNone;
+  return out;
+}
+
+}  // namespace gmm_localization

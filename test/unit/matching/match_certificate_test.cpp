@@ -1,0 +1,295 @@
+// The match certificate against brute force (every pose of the window scored), on seeded random
+// maps and scans: certified exactly when the brute-force plausible set lies inside the exclusion
+// zone and off the window's border, with the same protection level and separation; and on the
+// synthetic street (certified from its own scans) against a corridor (never certified).
+
+#include "gmm_localization/core/matching/match_certificate.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "gmm_localization/core/matching/registration.h"
+#include "gmm_localization/core/raster/rasterizer.h"
+#include "support/random_map.h"
+#include "support/street_map.h"
+#include "support/synthetic_world.h"
+
+namespace gmm_localization {
+namespace {
+
+/// The certificate's definition, evaluated over every pose of the window.
+struct Reference {
+  bool certified = false;
+  bool ambiguous = false;
+  bool border = false;
+  bool rival_within_depth = false;
+  int64_t rival = -1;  ///< best score elsewhere (-1: nothing elsewhere)
+  double protection_xy_m = 0.0;
+  double protection_heading_rad = 0.0;
+};
+
+Reference bruteForce(const SearchProblem& p, const SearchOutcome& opt, const CertificateOptions& o) {
+  const SearchWindow& w = p.window();
+  const double res = p.map().geometry().resolution_m;
+  const ScoreQuantizer q(p.map().options());
+  const double to_units = static_cast<double>(p.scanPoints()) / q.step();
+  const int64_t margin = static_cast<int64_t>(std::floor(o.margin_per_point * to_units));
+  const int64_t depth = static_cast<int64_t>(std::floor(o.separation_depth_per_point * to_units));
+  Reference r;
+  std::vector<int64_t> scores;
+  for (int j = 0; j < w.sizeH(); ++j) {
+    p.scoreBlock(j, 0, 0, w.sizeX(), w.sizeY(), scores);
+    for (int ty = 0; ty < w.sizeY(); ++ty) {
+      for (int tx = 0; tx < w.sizeX(); ++tx) {
+        const int64_t s = scores[static_cast<size_t>(ty) * w.sizeX() + tx];
+        const double dxy = std::hypot((tx - opt.tx) * res, (ty - opt.ty) * res);
+        const double dh = std::abs(j - opt.heading_index) * w.heading_step_rad;
+        const bool elsewhere = dxy > o.exclusion_radius_m || dh > o.exclusion_heading_rad;
+        if (elsewhere) r.rival = std::max(r.rival, s);
+        if (s < opt.score - margin) continue;
+        r.protection_xy_m = std::max(r.protection_xy_m, dxy);
+        r.protection_heading_rad = std::max(r.protection_heading_rad, dh);
+        r.ambiguous = r.ambiguous || elsewhere;
+        r.border = r.border || (w.sizeX() > 1 && (tx == 0 || tx == w.sizeX() - 1)) ||
+                   (w.sizeY() > 1 && (ty == 0 || ty == w.sizeY() - 1)) ||
+                   (w.sizeH() > 1 && (j == 0 || j == w.sizeH() - 1));
+      }
+    }
+  }
+  r.rival_within_depth = r.rival >= 0 && r.rival >= opt.score - depth;
+  r.certified = !r.ambiguous && !r.border;
+  return r;
+}
+
+MapGeometry randomGeometry() {
+  MapGeometry g;
+  g.resolution_m = 0.2;
+  g.tile_size_cells = 40;
+  g.origin_x_m = -4.1;
+  g.origin_y_m = 2.3;
+  return g;
+}
+
+TEST(MatchCertificate, EqualsBruteForceOnRandomCases) {
+  const GmmMap map = testing::randomMap(11, randomGeometry(), -2, -2, 4, 4, 0.35);
+  RasterOptions ro;
+  ro.chunk_shift = 5;
+  ro.num_layers = 4;
+  ChunkMap chunks(map.geometry(), ro);
+  for (int cy = -4; cy <= 3; ++cy) {
+    for (int cx = -4; cx <= 3; ++cx) chunks.insert(rasterizeChunk(map, {cx, cy}, ro).value());
+  }
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int certified = 0, ambiguous = 0, edge = 0, exact_separation = 0;
+  for (int c = 0; c < 120; ++c) {
+    Pose6 prior;
+    prior.x = -8.0 + 16.0 * u(rng);
+    prior.y = -8.0 + 16.0 * u(rng);
+    prior.yaw = 6.28 * u(rng);
+    const SearchWindow w = SearchWindow::fromExtent(prior, 0.6 + 2.0 * u(rng), 0.6 + 2.0 * u(rng),
+                                                    0.1 * u(rng), 0.02, 0.2);
+    PointList pts;
+    const int n = 20 + static_cast<int>(400 * u(rng));
+    for (int i = 0; i < n; ++i) {
+      pts.emplace_back(static_cast<float>(8.0 * u(rng) - 4.0), static_cast<float>(8.0 * u(rng) - 4.0),
+                       static_cast<float>(-1.8 + 5.8 * u(rng)));
+    }
+    auto problem = SearchProblem::create(chunks, pts, w);
+    ASSERT_TRUE(problem.ok()) << problem.error();
+    // Odd cases certify an exhaustive optimum (the certificate scores the coarsest layer
+    // itself), even ones a branch-and-bound optimum (its coarsest-layer scores reused).
+    const SearchOutcome opt =
+        c % 2 ? exhaustiveSearch(problem.value()) : branchAndBoundSearch(problem.value());
+    ASSERT_EQ(opt.top_scores.empty(), c % 2 == 1);
+    CertificateOptions o;
+    o.exclusion_radius_m = 0.2 + 0.8 * u(rng);
+    o.exclusion_heading_rad = 0.01 + 0.05 * u(rng);
+    o.margin_per_point = ((c / 2) % 4) * 0.02;
+    o.separation_depth_per_point = o.margin_per_point + 0.1 * u(rng);
+    o.max_evaluations = 1000000;
+    const MatchCertificate cert = certifyOptimum(problem.value(), opt, o);
+    const Reference ref = bruteForce(problem.value(), opt, o);
+    ASSERT_EQ(cert.certified, ref.certified) << "case " << c << " failure "
+                                             << certificateFailureName(cert.failure);
+    EXPECT_EQ(cert.separation_exact, ref.rival_within_depth) << "case " << c;
+    if (ref.rival_within_depth) {
+      const double expect = static_cast<double>(opt.score - ref.rival) *
+                            ScoreQuantizer(ro).step() / problem->scanPoints();
+      EXPECT_NEAR(cert.separation_per_point, expect, 1e-12) << "case " << c;
+      ++exact_separation;
+    } else {
+      EXPECT_GE(cert.separation_per_point, o.separation_depth_per_point - ScoreQuantizer(ro).step())
+          << "case " << c;
+    }
+    if (ref.ambiguous) {
+      EXPECT_EQ(cert.failure, CertificateFailure::kAmbiguous) << "case " << c;
+      ++ambiguous;
+    } else {
+      // Not stopped early: the whole plausible set was placed.
+      EXPECT_DOUBLE_EQ(cert.protection_xy_m, ref.protection_xy_m) << "case " << c;
+      EXPECT_DOUBLE_EQ(cert.protection_heading_rad, ref.protection_heading_rad) << "case " << c;
+      EXPECT_EQ(cert.failure, ref.border ? CertificateFailure::kWindowEdge : CertificateFailure::kNone)
+          << "case " << c;
+      edge += ref.border ? 1 : 0;
+      certified += ref.certified ? 1 : 0;
+    }
+  }
+  // Every branch of the definition was exercised.
+  EXPECT_GE(certified, 10);
+  EXPECT_GE(ambiguous, 10);
+  EXPECT_GE(edge, 3);
+  EXPECT_GE(exact_separation, 10);
+  std::printf("certified %d, ambiguous %d, window edge %d, exact separation %d of 120\n", certified,
+              ambiguous, edge, exact_separation);
+}
+
+TEST(MatchCertificate, ABudgetTooSmallNeverCertifiesWhatBruteForceRejects) {
+  const GmmMap map = testing::randomMap(12, randomGeometry(), -2, -2, 4, 4, 0.35);
+  RasterOptions ro;
+  ro.chunk_shift = 5;
+  ro.num_layers = 4;
+  ChunkMap chunks(map.geometry(), ro);
+  for (int cy = -4; cy <= 3; ++cy) {
+    for (int cx = -4; cx <= 3; ++cx) chunks.insert(rasterizeChunk(map, {cx, cy}, ro).value());
+  }
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int budget = 0;
+  for (int c = 0; c < 40; ++c) {
+    Pose6 prior;
+    prior.x = -6.0 + 12.0 * u(rng);
+    prior.y = -6.0 + 12.0 * u(rng);
+    const SearchWindow w = SearchWindow::fromExtent(prior, 2.0, 2.0, 0.06, 0.02, 0.2);
+    PointList pts;
+    for (int i = 0; i < 200; ++i) {
+      pts.emplace_back(static_cast<float>(8.0 * u(rng) - 4.0), static_cast<float>(8.0 * u(rng) - 4.0),
+                       static_cast<float>(-1.8 + 5.8 * u(rng)));
+    }
+    auto problem = SearchProblem::create(chunks, pts, w);
+    ASSERT_TRUE(problem.ok());
+    const SearchOutcome opt = branchAndBoundSearch(problem.value());
+    CertificateOptions o;
+    o.margin_per_point = 0.02 * (c % 3);
+    o.max_evaluations = 1 + c * 5;
+    const MatchCertificate cert = certifyOptimum(problem.value(), opt, o);
+    const Reference ref = bruteForce(problem.value(), opt, o);
+    if (cert.certified) {
+      EXPECT_TRUE(ref.certified) << "case " << c;
+    }
+    budget += cert.failure == CertificateFailure::kBudget ? 1 : 0;
+  }
+  EXPECT_GT(budget, 10) << "the small budgets stop most proofs";
+}
+
+TEST(MatchCertificate, DisabledReportsDisabled) {
+  const GmmMap map = testing::randomMap(13, randomGeometry(), 0, 0, 1, 1);
+  RasterOptions ro;
+  ro.chunk_shift = 5;
+  ro.num_layers = 3;
+  ChunkMap chunks(map.geometry(), ro);
+  chunks.insert(rasterizeChunk(map, {0, 0}, ro).value());
+  PointList pts = {{0.0f, 0.0f, 0.0f}, {1.0f, 0.5f, 0.2f}};
+  Pose6 prior;
+  prior.x = -2.0;
+  prior.y = 4.5;
+  auto problem = SearchProblem::create(chunks, pts, SearchWindow::fromExtent(prior, 1, 1, 0, 0.02, 0.2));
+  ASSERT_TRUE(problem.ok()) << problem.error();
+  CertificateOptions o;
+  o.enabled = false;
+  const MatchCertificate cert = certifyOptimum(problem.value(), exhaustiveSearch(problem.value()), o);
+  EXPECT_FALSE(cert.certified);
+  EXPECT_EQ(cert.failure, CertificateFailure::kDisabled);
+  EXPECT_EQ(cert.evaluations, 0);
+  CertificateOptions bad;
+  bad.separation_depth_per_point = bad.margin_per_point / 2;
+  EXPECT_FALSE(bad.validate().empty());
+  EXPECT_TRUE(CertificateOptions().validate().empty());
+}
+
+TEST(MatchCertificate, StreetScansAreCertifiedNearTheTruth) {
+  const testing::SyntheticWorld world(42);
+  const GmmMap gmm = world.buildMap(testing::streetGeometry(), 1);
+  const ChunkMap chunks = testing::rasterizeStreet(gmm);
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const Registration reg{RegistrationOptions()};
+  int certified = 0;
+  for (int c = 0; c < 10; ++c) {
+    const Pose6 truth = world.streetPose(rng);
+    const PointList scan = world.scan(truth, 35.0, 0.25, 0.0, 300 + c);
+    MatchRequest req;
+    req.prior = truth;
+    req.prior.x += 1.5 * u(rng);
+    req.prior.y += 1.5 * u(rng);
+    req.half_x_m = req.half_y_m = 2.5;
+    req.half_heading_rad = 0.0524;
+    auto prepared = reg.prepare(chunks, scan, req);
+    ASSERT_TRUE(prepared.ok()) << prepared.error();
+    const SearchOutcome opt = branchAndBoundSearch(prepared->problem);
+    const MatchCertificate cert = certifyOptimum(prepared->problem, opt, CertificateOptions());
+    if (!cert.certified) continue;
+    ++certified;
+    // The truth lies within the protection level (plus one cell) of the optimum.
+    EXPECT_LE(std::hypot(opt.pose.x - truth.x, opt.pose.y - truth.y), cert.protection_xy_m + 0.2)
+        << "case " << c;
+    EXPECT_LT(cert.evaluations, opt.stats.evaluations * 2) << "case " << c;
+  }
+  EXPECT_GE(certified, 9);
+}
+
+TEST(MatchCertificate, ACorridorIsNeverCertified) {
+  // Ground everywhere and two walls along x: every translation along x scores the same.
+  MapGeometry g;
+  g.tile_size_cells = 128;
+  GmmMap map(g);
+  for (int32_t ty = -1; ty <= 0; ++ty) {
+    for (int32_t tx = -2; tx <= 1; ++tx) {
+      auto tile = std::make_shared<GmmTile>(TileId{tx, ty}, g.tile_size_cells);
+      const CellIndex o = g.tileOrigin({tx, ty});
+      for (int ly = 0; ly < g.tile_size_cells; ++ly) {
+        for (int lx = 0; lx < g.tile_size_cells; ++lx) {
+          const double y = g.cellCenter({o.x + lx, o.y + ly}).y();
+          GaussianMixture1D& cell = tile->at(lx, ly);
+          if (std::abs(std::abs(y) - 3.0) < 0.15) {
+            cell.add({0.2f, 0.0f, 0.03f});
+            cell.add({0.8f, 2.0f, 1.2f});
+          } else if (std::abs(y) < 3.0) {
+            cell.add({1.0f, 0.0f, 0.03f});
+          }
+        }
+      }
+      map.insert(tile);
+    }
+  }
+  RasterOptions ro;
+  ChunkMap chunks(g, ro);
+  for (int cy = -2; cy <= 1; ++cy) {
+    for (int cx = -3; cx <= 2; ++cx) chunks.insert(rasterizeChunk(map, {cx, cy}, ro).value());
+  }
+  PointList scan;
+  for (double x = -20.0; x <= 20.0; x += 0.1) {
+    for (double z = 0.2; z < 4.0; z += 0.2) {
+      scan.emplace_back(x, 3.0f, z);
+      scan.emplace_back(x, -3.0f, z);
+    }
+    for (double y = -2.8; y <= 2.8; y += 0.4) scan.emplace_back(x, y, 0.0f);
+  }
+  MatchRequest req;
+  req.half_x_m = req.half_y_m = 2.0;
+  req.half_heading_rad = 0.05;
+  const Registration reg{RegistrationOptions()};
+  auto prepared = reg.prepare(chunks, scan, req);
+  ASSERT_TRUE(prepared.ok()) << prepared.error();
+  const SearchOutcome opt = branchAndBoundSearch(prepared->problem);
+  const MatchCertificate cert = certifyOptimum(prepared->problem, opt, CertificateOptions());
+  EXPECT_FALSE(cert.certified);
+  EXPECT_NE(cert.failure, CertificateFailure::kNone);
+  EXPECT_LT(cert.separation_per_point, CertificateOptions().margin_per_point + 1e-9);
+}
+
+}  // namespace
+}  // namespace gmm_localization
