@@ -202,6 +202,52 @@ def fig10(runs, path):
     return path
 
 
+def integrity(runs, path):
+    """Stanford-style plot: error against protection level of every registration with a
+    certificate (drive matches and Fig. 8), certified in blue, uncertified in grey; points
+    right of the diagonal or above the alert limit while certified would be misleading."""
+    alert = 0.29
+    series = []
+    for run in runs:
+        for kind, rows in (("drive", run["matches"]), ("Fig. 8", run["offsets"])):
+            rows = [r for r in rows if r.get("protection_xy_m") not in (None, "")
+                    and (kind == "Fig. 8" and r["has_result"] == "1"
+                         or kind == "drive" and r["outcome"] == "accepted" and r["has_pose"] == "1")]
+            if rows:
+                series.append((run, kind, rows))
+    if not series:
+        return None
+    fig, axes = plt.subplots(1, len(series), figsize=(4.6 * len(series), 4.4), squeeze=False)
+    for k, (run, kind, rows) in enumerate(series):
+        ax = axes[0][k]
+        pl = column(rows, "protection_xy_m")
+        if kind == "drive":
+            err = np.hypot(column(rows, "longitudinal_m"), column(rows, "lateral_m"))
+        else:
+            err = column(rows, "error_m")
+        cert = column(rows, "certified") > 0
+        top = max(1.0, float(np.max(pl)) * 1.1, float(np.max(err)) * 1.1)
+        ax.scatter(pl[~cert], err[~cert], s=8, color="tab:gray", label="uncertified (%d)" % int(np.sum(~cert)))
+        ax.scatter(pl[cert], err[cert], s=8, color="tab:blue", label="certified (%d)" % int(np.sum(cert)))
+        ax.plot([1e-3, top], [1e-3, top], color="black", linewidth=0.8, label="error = protection level")
+        ax.axhline(alert, color="tab:red", linestyle="--", linewidth=0.8, label="alert limit 0.29 m")
+        bad = int(np.sum(cert & ((err > pl) | (err > alert))))
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlim(0.05, top)
+        ax.set_ylim(1e-3, top)
+        ax.set_xlabel("protection level [m]")
+        ax.set_ylabel("error against ground truth [m]")
+        ax.set_title("%s, %s: %d misleading" % (run["summary"]["dataset"], kind, bad))
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(loc="upper left", fontsize=7)
+    fig.suptitle("Integrity: error against protection level")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
 def cm(v):
     return "-" if v is None or (isinstance(v, float) and math.isnan(v)) else "%.1f cm" % (100 * v)
 
@@ -278,6 +324,7 @@ def main():
     made = [fig8(offline, os.path.join(a.out, "fig8_registration.png")),
             fig9(offline, os.path.join(a.out, "fig9_traversal.png")),
             fig10(runs, os.path.join(a.out, "fig10_errors.png")),
+            integrity(offline, os.path.join(a.out, "integrity.png")),
             table1(runs, os.path.join(a.out, "table1.md"))]
     for m in made:
         if m:

@@ -3,31 +3,13 @@
 #include <queue>
 #include <vector>
 
+#include "search_node.h"
+
 namespace gmm_localization {
 namespace {
 
-/// Lexicographic tie key: smaller wins.
-bool keyLess(int ja, int tya, int txa, int jb, int tyb, int txb) {
-  if (ja != jb) return ja < jb;
-  if (tya != tyb) return tya < tyb;
-  return txa < txb;
-}
-
-struct Node {
-  int64_t bound;
-  int32_t heading_index;
-  int32_t ty;
-  int32_t tx;
-  int32_t layer;
-};
-
-/// Heap order: higher bound first; on equal bounds the smaller first-leaf key first.
-struct Lower {
-  bool operator()(const Node& a, const Node& b) const {
-    if (a.bound != b.bound) return a.bound < b.bound;
-    return keyLess(b.heading_index, b.ty, b.tx, a.heading_index, a.ty, a.tx);
-  }
-};
+using search_detail::Lower;
+using search_detail::Node;
 
 SearchOutcome makeOutcome(const SearchProblem& problem, int j, int tx, int ty, int64_t score,
                           SearchStats stats) {

@@ -5,6 +5,8 @@
 #include <queue>
 #include <vector>
 
+#include "search_node.h"
+
 namespace gmm_localization {
 
 std::string CertificateOptions::validate() const {
@@ -37,23 +39,8 @@ const char* certificateFailureName(CertificateFailure failure) {
 
 namespace {
 
-struct Node {
-  int64_t bound;
-  int32_t heading_index;
-  int32_t ty;
-  int32_t tx;
-  int32_t layer;
-};
-
-/// Higher bound first; ties by the smaller (heading, ty, tx) so runs are reproducible.
-struct Lower {
-  bool operator()(const Node& a, const Node& b) const {
-    if (a.bound != b.bound) return a.bound < b.bound;
-    if (a.heading_index != b.heading_index) return a.heading_index > b.heading_index;
-    if (a.ty != b.ty) return a.ty > b.ty;
-    return a.tx > b.tx;
-  }
-};
+using search_detail::Lower;
+using search_detail::Node;
 
 /// Where a node's block lies relative to the optimum, the exclusion zone and the window border.
 class Geometry {

@@ -13,6 +13,7 @@
 
 #include "gmm_localization/core/matching/registration.h"
 #include "gmm_localization/core/raster/rasterizer.h"
+#include "support/corridor_map.h"
 #include "support/random_map.h"
 #include "support/street_map.h"
 #include "support/synthetic_world.h"
@@ -73,15 +74,25 @@ MapGeometry randomGeometry() {
   return g;
 }
 
-TEST(MatchCertificate, EqualsBruteForceOnRandomCases) {
-  const GmmMap map = testing::randomMap(11, randomGeometry(), -2, -2, 4, 4, 0.35);
+RasterOptions randomRasterOptions() {
   RasterOptions ro;
   ro.chunk_shift = 5;
   ro.num_layers = 4;
+  return ro;
+}
+
+ChunkMap rasterizeRandom(const GmmMap& map, const RasterOptions& ro) {
   ChunkMap chunks(map.geometry(), ro);
   for (int cy = -4; cy <= 3; ++cy) {
     for (int cx = -4; cx <= 3; ++cx) chunks.insert(rasterizeChunk(map, {cx, cy}, ro).value());
   }
+  return chunks;
+}
+
+TEST(MatchCertificate, EqualsBruteForceOnRandomCases) {
+  const GmmMap map = testing::randomMap(11, randomGeometry(), -2, -2, 4, 4, 0.35);
+  const RasterOptions ro = randomRasterOptions();
+  const ChunkMap chunks = rasterizeRandom(map, ro);
   std::mt19937 rng(31);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   int certified = 0, ambiguous = 0, edge = 0, exact_separation = 0;
@@ -149,13 +160,8 @@ TEST(MatchCertificate, EqualsBruteForceOnRandomCases) {
 
 TEST(MatchCertificate, ABudgetTooSmallNeverCertifiesWhatBruteForceRejects) {
   const GmmMap map = testing::randomMap(12, randomGeometry(), -2, -2, 4, 4, 0.35);
-  RasterOptions ro;
-  ro.chunk_shift = 5;
-  ro.num_layers = 4;
-  ChunkMap chunks(map.geometry(), ro);
-  for (int cy = -4; cy <= 3; ++cy) {
-    for (int cx = -4; cx <= 3; ++cx) chunks.insert(rasterizeChunk(map, {cx, cy}, ro).value());
-  }
+  const RasterOptions ro = randomRasterOptions();
+  const ChunkMap chunks = rasterizeRandom(map, ro);
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   int budget = 0;
@@ -245,26 +251,7 @@ TEST(MatchCertificate, ACorridorIsNeverCertified) {
   // Ground everywhere and two walls along x: every translation along x scores the same.
   MapGeometry g;
   g.tile_size_cells = 128;
-  GmmMap map(g);
-  for (int32_t ty = -1; ty <= 0; ++ty) {
-    for (int32_t tx = -2; tx <= 1; ++tx) {
-      auto tile = std::make_shared<GmmTile>(TileId{tx, ty}, g.tile_size_cells);
-      const CellIndex o = g.tileOrigin({tx, ty});
-      for (int ly = 0; ly < g.tile_size_cells; ++ly) {
-        for (int lx = 0; lx < g.tile_size_cells; ++lx) {
-          const double y = g.cellCenter({o.x + lx, o.y + ly}).y();
-          GaussianMixture1D& cell = tile->at(lx, ly);
-          if (std::abs(std::abs(y) - 3.0) < 0.15) {
-            cell.add({0.2f, 0.0f, 0.03f});
-            cell.add({0.8f, 2.0f, 1.2f});
-          } else if (std::abs(y) < 3.0) {
-            cell.add({1.0f, 0.0f, 0.03f});
-          }
-        }
-      }
-      map.insert(tile);
-    }
-  }
+  const GmmMap map = testing::corridorMap(g);
   RasterOptions ro;
   ChunkMap chunks(g, ro);
   for (int cy = -2; cy <= 1; ++cy) {

@@ -12,6 +12,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "gmm_localization/core/raster/rasterizer.h"
+#include "support/corridor_map.h"
 #include "support/street_map.h"
 #include "support/synthetic_world.h"
 
@@ -75,35 +76,11 @@ TEST_F(RegistrationTest, RecoversFiftySeededPoses) {
               worst_yaw * 180.0 / M_PI);
 }
 
-/// A straight corridor along x: ground everywhere, walls at y = +-3 m.
-GmmMap corridorMap(const MapGeometry& g) {
-  GmmMap map(g);
-  for (int32_t ty = -1; ty <= 0; ++ty) {
-    for (int32_t tx = -2; tx <= 1; ++tx) {
-      auto tile = std::make_shared<GmmTile>(TileId{tx, ty}, g.tile_size_cells);
-      const CellIndex o = g.tileOrigin({tx, ty});
-      for (int ly = 0; ly < g.tile_size_cells; ++ly) {
-        for (int lx = 0; lx < g.tile_size_cells; ++lx) {
-          const double y = g.cellCenter({o.x + lx, o.y + ly}).y();
-          GaussianMixture1D& cell = tile->at(lx, ly);
-          if (std::abs(std::abs(y) - 3.0) < 0.15) {
-            cell.add({0.2f, 0.0f, 0.03f});
-            cell.add({0.8f, 2.0f, 1.2f});
-          } else if (std::abs(y) < 3.0) {
-            cell.add({1.0f, 0.0f, 0.03f});
-          }
-        }
-      }
-      map.insert(tile);
-    }
-  }
-  return map;
-}
 
 TEST(RegistrationCovariance, LargerAlongACorridorThanAcrossIt) {
   MapGeometry g;
   g.tile_size_cells = 128;
-  const GmmMap map = corridorMap(g);
+  const GmmMap map = testing::corridorMap(g);
   RasterOptions ro;
   ChunkMap chunks(g, ro);
   for (int cy = -2; cy <= 1; ++cy) {
