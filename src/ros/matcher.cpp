@@ -1,6 +1,8 @@
 // Matcher set-up and tear-down (see matcher.h).
 #include "gmm_localization/ros/matcher.h"
 
+#include <algorithm>
+
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <sensor_msgs/Image.h>
 
@@ -39,7 +41,12 @@ Matcher::Matcher(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& nam
   traversal_pub_ = nh_.advertise<sensor_msgs::Image>("search_traversal", 1);
 
   const ros::TransportHints hints = ros::TransportHints().tcpNoDelay();
-  scan_sub_ = nh_.subscribe("velodyne_points", 2, &Matcher::onScan, this, hints);
+  // A subscriber queue deeper than the session's: every scan reaches onScan, so a scan dropped
+  // under load is dropped (and counted) by the session.
+  scan_sub_ = nh_.subscribe("velodyne_points",
+                            static_cast<uint32_t>(std::max(options_.scan_subscriber_queue_size,
+                                                           options_.session.scan_queue_size + 1)),
+                            &Matcher::onScan, this, hints);
   odom_sub_ = nh_.subscribe("odom", 200, &Matcher::onOdom, this, hints);
   posterior_sub_ = nh_.subscribe("odometry", 20, &Matcher::onPosterior, this, hints);
   initialpose_sub_ = nh_.subscribe("initialpose", 2, &Matcher::onInitialPose, this);

@@ -164,6 +164,8 @@ MatcherOptions loadMatcherOptions(const ParamSource& pnh) {
       param(pnh, "traversal/max_width_px", o.traversal.max_width_px, 16, 16384);
   o.traversal.max_tile_px = param(pnh, "traversal/max_tile_px", o.traversal.max_tile_px, 4, 4096);
   o.traversal.gap_px = param(pnh, "traversal/gap_px", o.traversal.gap_px, 0, 64);
+  o.scan_subscriber_queue_size =
+      param(pnh, "scan_subscriber_queue_size", o.scan_subscriber_queue_size, 1, 1000);
   o.expected_scan_rate_hz =
       param(pnh, "expected_scan_rate_hz", o.expected_scan_rate_hz, 0.01, 1000.0);
   o.min_accepted_share = param(pnh, "min_accepted_share", o.min_accepted_share, 0.0, 1.0);

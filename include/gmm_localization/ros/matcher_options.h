@@ -41,6 +41,10 @@ struct MatcherOptions {
   double classified_max_mahalanobis = 10.0;   ///< clamp of the `mahalanobis` field
   TraversalImageOptions traversal;
 
+  /// ROS subscriber queue of the merged clouds. Larger than the session's scan queue so that,
+  /// under load, scans are dropped in the session's queue (counted, reported in the next
+  /// status's dropped_scans) and not silently by roscpp before the matcher sees them.
+  int scan_subscriber_queue_size = 10;
   double expected_scan_rate_hz = 10.0;  ///< diagnostics: scans below half this rate warn
   double min_accepted_share = 0.5;      ///< diagnostics: warn below this share (last 50)
 };
