@@ -1,5 +1,6 @@
 // Matcher health on /diagnostics (matcher.h): scan and match rates, accepted share, last score
-// per point, certified share and last certificate, search time, window, chunks held, dropped scans, prior mode and last reason.
+// per point, certified share and last certificate, search time, window, chunks held, dropped scans,
+// prior mode and last reason.
 #include <cmath>
 #include <cstdio>
 
@@ -76,8 +77,9 @@ void Matcher::setupDiagnostics() {
     size_t certified_recent = 0;
     for (bool c : recent_certified_) certified_recent += c ? 1 : 0;
     const double certified_share =
-        recent_certified_.empty() ? 0.0
-                                  : static_cast<double>(certified_recent) / recent_certified_.size();
+        recent_certified_.empty()
+            ? 0.0
+            : static_cast<double>(certified_recent) / recent_certified_.size();
     s.add("certified share of accepted (last 50)", fixed(certified_share, 2));
     s.add("matches certified", certified_);
     s.add("last certificate", last_certificate_);
@@ -103,9 +105,9 @@ void Matcher::setupDiagnostics() {
     } else if (recent_accepted_.size() >= 5 && share < options_.min_accepted_share) {
       s.summary(diagnostic_msgs::DiagnosticStatus::WARN, "few matches accepted: " + last_reason_);
     } else if (recent_certified_.size() >= 5 && certified_share < options_.min_accepted_share) {
-      s.summary(diagnostic_msgs::DiagnosticStatus::WARN,
-                "few matches certified (ambiguous surroundings or a wrong prior): " +
-                    last_certificate_);
+      s.summary(
+          diagnostic_msgs::DiagnosticStatus::WARN,
+          "few matches certified (ambiguous surroundings or a wrong prior): " + last_certificate_);
     }
   });
 }

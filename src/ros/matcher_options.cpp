@@ -56,8 +56,8 @@ RegistrationOptions loadRegistrationOptions(const ParamSource& parent) {
   ce.margin_per_point = param(nh, "certificate/margin_per_point", ce.margin_per_point, 0.0, 100.0);
   ce.separation_depth_per_point = param(nh, "certificate/separation_depth_per_point",
                                         ce.separation_depth_per_point, 0.0, 100.0);
-  ce.max_evaluations = static_cast<int64_t>(param(
-      nh, "certificate/max_evaluations", static_cast<int>(ce.max_evaluations), 1, 100000000));
+  ce.max_evaluations = static_cast<int64_t>(
+      param(nh, "certificate/max_evaluations", static_cast<int>(ce.max_evaluations), 1, 100000000));
   o.classify_obstacles = param(nh, "classify_obstacles", o.classify_obstacles);
   o.obstacles.mahalanobis_threshold =
       param(nh, "obstacles/mahalanobis_threshold", o.obstacles.mahalanobis_threshold, 0.0, 1000.0);

@@ -118,7 +118,8 @@ SearchOutcome branchAndBoundSearch(const SearchProblem& problem,
     const Node n = queue.top();
     queue.pop();
     if (n.layer == 0) {
-      SearchOutcome out = makeOutcome(problem, n.heading_index, n.tx, n.ty, n.bound, std::move(stats));
+      SearchOutcome out =
+          makeOutcome(problem, n.heading_index, n.tx, n.ty, n.bound, std::move(stats));
       out.top_scores = std::move(all_top);
       return out;
     }

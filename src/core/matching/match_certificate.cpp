@@ -28,11 +28,16 @@ std::string CertificateOptions::validate() const {
 
 const char* certificateFailureName(CertificateFailure failure) {
   switch (failure) {
-    case CertificateFailure::kNone: return "";
-    case CertificateFailure::kDisabled: return "disabled";
-    case CertificateFailure::kAmbiguous: return "ambiguous";
-    case CertificateFailure::kWindowEdge: return "window_edge";
-    case CertificateFailure::kBudget: return "budget";
+    case CertificateFailure::kNone:
+      return "";
+    case CertificateFailure::kDisabled:
+      return "disabled";
+    case CertificateFailure::kAmbiguous:
+      return "ambiguous";
+    case CertificateFailure::kWindowEdge:
+      return "window_edge";
+    case CertificateFailure::kBudget:
+      return "budget";
   }
   return "unknown";
 }
@@ -55,10 +60,10 @@ class Geometry {
         r_h_(o.exclusion_heading_rad) {}
 
   struct Extent {
-    double max_xy_m;    ///< farthest x-y distance of a pose of the block from the optimum
-    double heading_rad; ///< heading distance (one heading per node)
-    bool inside;        ///< every pose of the block is inside the exclusion zone
-    bool border;        ///< the block holds a pose on the window's border
+    double max_xy_m;     ///< farthest x-y distance of a pose of the block from the optimum
+    double heading_rad;  ///< heading distance (one heading per node)
+    bool inside;         ///< every pose of the block is inside the exclusion zone
+    bool border;         ///< the block holds a pose on the window's border
   };
 
   Extent of(const Node& n) const {
@@ -129,9 +134,8 @@ MatchCertificate certifyOptimum(const SearchProblem& problem, const SearchOutcom
   const int stride = 1 << top;
   // Reused from the branch-and-bound when it kept them (the same layer, the same scores).
   const int nx = (w.sizeX() + stride - 1) / stride, ny = (w.sizeY() + stride - 1) / stride;
-  const bool reuse =
-      optimum.top_scores.size() == static_cast<size_t>(nx) * ny * w.sizeH() &&
-      optimum.stats.top_layer == top;
+  const bool reuse = optimum.top_scores.size() == static_cast<size_t>(nx) * ny * w.sizeH() &&
+                     optimum.stats.top_layer == top;
   for (int j = 0; j < w.sizeH(); ++j) {
     for (int ty = 0; ty < w.sizeY(); ty += 2 * stride) {
       for (int tx = 0; tx < w.sizeX(); tx += 2 * stride) {
@@ -143,8 +147,9 @@ MatchCertificate certifyOptimum(const SearchProblem& problem, const SearchOutcom
             if (cx >= w.sizeX() || cy >= w.sizeY()) continue;
             int64_t score = quad[b * 2 + a];
             if (reuse) {
-              score = optimum.top_scores[(static_cast<size_t>(j) * ny + cy / stride) * nx +
-                                         cx / stride];
+              score =
+                  optimum
+                      .top_scores[(static_cast<size_t>(j) * ny + cy / stride) * nx + cx / stride];
             } else {
               ++out.evaluations;
             }
@@ -211,7 +216,8 @@ MatchCertificate certifyOptimum(const SearchProblem& problem, const SearchOutcom
       pending = matters(queue.top(), geometry.of(queue.top()));
       queue.pop();
     }
-    if (!pending) out.failure = border ? CertificateFailure::kWindowEdge : CertificateFailure::kNone;
+    if (!pending)
+      out.failure = border ? CertificateFailure::kWindowEdge : CertificateFailure::kNone;
   }
   out.certified = out.failure == CertificateFailure::kNone;
   return out;

@@ -259,8 +259,9 @@ RegistrationResult<MatchResult> Registration::finish(
   {
     const double res = map.geometry().resolution_m;
     const double step = prepared.problem.window().heading_step_rad;
-    out.protection_xy_m = out.certificate.protection_xy_m + res * std::sqrt(2.0) +
-                          std::hypot(out.pose.x - out.search.pose.x, out.pose.y - out.search.pose.y);
+    out.protection_xy_m =
+        out.certificate.protection_xy_m + res * std::sqrt(2.0) +
+        std::hypot(out.pose.x - out.search.pose.x, out.pose.y - out.search.pose.y);
     out.protection_heading_rad = out.certificate.protection_heading_rad + step +
                                  std::abs(wrapAngle(out.pose.yaw - out.search.pose.yaw));
   }

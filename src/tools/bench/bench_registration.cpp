@@ -134,7 +134,8 @@ struct WindowRow {
       error_deg;
   std::vector<double> refine_ms, covariance_ms, obstacles_ms, certificate_ms;
   std::vector<double> points, lookups;
-  int certified = 0, certified_wrong = 0;  // certified matches; of them outside success  // search points per heading; evaluations x points
+  int certified = 0, certified_wrong = 0;  // certified matches; of them outside success  // search
+                                           // points per heading; evaluations x points
   int success = 0, runs = 0, equal = 0, compared = 0, failures = 0;
   std::vector<double> exhaustive_ms;
 };

@@ -52,7 +52,8 @@ void addToIntegrity(const IntegrityFields& f, double error_m, IntegritySummary& 
   ++s.registrations;
   s.certificate_ms.push_back(f.certificate_ms);
   if (f.failure == "budget") ++s.budget_exhausted;
-  if (std::isfinite(f.truth_deficit_per_point)) s.truth_deficit.push_back(f.truth_deficit_per_point);
+  if (std::isfinite(f.truth_deficit_per_point))
+    s.truth_deficit.push_back(f.truth_deficit_per_point);
   if (f.certified) {
     ++s.certified;
     s.protection_xy_m.push_back(f.protection_xy_m);
@@ -103,8 +104,8 @@ std::string integrityMarkdown(const IntegritySummary& s, const std::string& what
     << "; protection level median " << fixed(quantileOr(s.protection_xy_m, 0.5), 2) << " m, p95 "
     << fixed(quantileOr(s.protection_xy_m, 0.95), 2) << " m; the truth's score deficit "
     << "[nats per point] median " << fixed(quantileOr(s.truth_deficit, 0.5), 4) << ", p99 "
-    << fixed(quantileOr(s.truth_deficit, 0.99), 4) << ", max "
-    << fixed(maxOr(s.truth_deficit), 4) << " (" << s.truth_deficit.size() << " with the truth "
+    << fixed(quantileOr(s.truth_deficit, 0.99), 4) << ", max " << fixed(maxOr(s.truth_deficit), 4)
+    << " (" << s.truth_deficit.size() << " with the truth "
     << "in the window); " << s.budget_exhausted << " out of budget; certificate time median "
     << fixed(quantileOr(s.certificate_ms, 0.5), 1) << " ms, p95 "
     << fixed(quantileOr(s.certificate_ms, 0.95), 1) << " ms, max "

@@ -1,5 +1,5 @@
-#include "evaluate/evaluate_integrity.h"
 #include "evaluate/evaluate_localize.h"
+#include "evaluate/evaluate_integrity.h"
 
 #include <chrono>
 #include <cmath>

@@ -1,5 +1,5 @@
-#include "evaluate/evaluate_integrity.h"
 #include "evaluate/evaluate_offsets.h"
+#include "evaluate/evaluate_integrity.h"
 
 #include <cmath>
 #include <fstream>

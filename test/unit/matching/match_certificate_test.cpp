@@ -32,7 +32,8 @@ struct Reference {
   double protection_heading_rad = 0.0;
 };
 
-Reference bruteForce(const SearchProblem& p, const SearchOutcome& opt, const CertificateOptions& o) {
+Reference bruteForce(const SearchProblem& p, const SearchOutcome& opt,
+                     const CertificateOptions& o) {
   const SearchWindow& w = p.window();
   const double res = p.map().geometry().resolution_m;
   const ScoreQuantizer q(p.map().options());
@@ -106,7 +107,8 @@ TEST(MatchCertificate, EqualsBruteForceOnRandomCases) {
     PointList pts;
     const int n = 20 + static_cast<int>(400 * u(rng));
     for (int i = 0; i < n; ++i) {
-      pts.emplace_back(static_cast<float>(8.0 * u(rng) - 4.0), static_cast<float>(8.0 * u(rng) - 4.0),
+      pts.emplace_back(static_cast<float>(8.0 * u(rng) - 4.0),
+                       static_cast<float>(8.0 * u(rng) - 4.0),
                        static_cast<float>(-1.8 + 5.8 * u(rng)));
     }
     auto problem = SearchProblem::create(chunks, pts, w);
@@ -124,12 +126,12 @@ TEST(MatchCertificate, EqualsBruteForceOnRandomCases) {
     o.max_evaluations = 1000000;
     const MatchCertificate cert = certifyOptimum(problem.value(), opt, o);
     const Reference ref = bruteForce(problem.value(), opt, o);
-    ASSERT_EQ(cert.certified, ref.certified) << "case " << c << " failure "
-                                             << certificateFailureName(cert.failure);
+    ASSERT_EQ(cert.certified, ref.certified)
+        << "case " << c << " failure " << certificateFailureName(cert.failure);
     EXPECT_EQ(cert.separation_exact, ref.rival_within_depth) << "case " << c;
     if (ref.rival_within_depth) {
-      const double expect = static_cast<double>(opt.score - ref.rival) *
-                            ScoreQuantizer(ro).step() / problem->scanPoints();
+      const double expect = static_cast<double>(opt.score - ref.rival) * ScoreQuantizer(ro).step() /
+                            problem->scanPoints();
       EXPECT_NEAR(cert.separation_per_point, expect, 1e-12) << "case " << c;
       ++exact_separation;
     } else {
@@ -143,7 +145,8 @@ TEST(MatchCertificate, EqualsBruteForceOnRandomCases) {
       // Not stopped early: the whole plausible set was placed.
       EXPECT_DOUBLE_EQ(cert.protection_xy_m, ref.protection_xy_m) << "case " << c;
       EXPECT_DOUBLE_EQ(cert.protection_heading_rad, ref.protection_heading_rad) << "case " << c;
-      EXPECT_EQ(cert.failure, ref.border ? CertificateFailure::kWindowEdge : CertificateFailure::kNone)
+      EXPECT_EQ(cert.failure,
+                ref.border ? CertificateFailure::kWindowEdge : CertificateFailure::kNone)
           << "case " << c;
       edge += ref.border ? 1 : 0;
       certified += ref.certified ? 1 : 0;
@@ -172,7 +175,8 @@ TEST(MatchCertificate, ABudgetTooSmallNeverCertifiesWhatBruteForceRejects) {
     const SearchWindow w = SearchWindow::fromExtent(prior, 2.0, 2.0, 0.06, 0.02, 0.2);
     PointList pts;
     for (int i = 0; i < 200; ++i) {
-      pts.emplace_back(static_cast<float>(8.0 * u(rng) - 4.0), static_cast<float>(8.0 * u(rng) - 4.0),
+      pts.emplace_back(static_cast<float>(8.0 * u(rng) - 4.0),
+                       static_cast<float>(8.0 * u(rng) - 4.0),
                        static_cast<float>(-1.8 + 5.8 * u(rng)));
     }
     auto problem = SearchProblem::create(chunks, pts, w);
@@ -202,11 +206,13 @@ TEST(MatchCertificate, DisabledReportsDisabled) {
   Pose6 prior;
   prior.x = -2.0;
   prior.y = 4.5;
-  auto problem = SearchProblem::create(chunks, pts, SearchWindow::fromExtent(prior, 1, 1, 0, 0.02, 0.2));
+  auto problem =
+      SearchProblem::create(chunks, pts, SearchWindow::fromExtent(prior, 1, 1, 0, 0.02, 0.2));
   ASSERT_TRUE(problem.ok()) << problem.error();
   CertificateOptions o;
   o.enabled = false;
-  const MatchCertificate cert = certifyOptimum(problem.value(), exhaustiveSearch(problem.value()), o);
+  const MatchCertificate cert =
+      certifyOptimum(problem.value(), exhaustiveSearch(problem.value()), o);
   EXPECT_FALSE(cert.certified);
   EXPECT_EQ(cert.failure, CertificateFailure::kDisabled);
   EXPECT_EQ(cert.evaluations, 0);

@@ -76,7 +76,6 @@ TEST_F(RegistrationTest, RecoversFiftySeededPoses) {
               worst_yaw * 180.0 / M_PI);
 }
 
-
 TEST(RegistrationCovariance, LargerAlongACorridorThanAcrossIt) {
   MapGeometry g;
   g.tile_size_cells = 128;

@@ -172,7 +172,8 @@ struct AcceptanceDecision {
 };
 
 /// Applies the acceptance rules in the order: finite result, map coverage, log-likelihood per
-/// point, search covariance, window edge, certificate (when required). `window` is discreteWindow() of the request.
+/// point, search covariance, window edge, certificate (when required). `window` is discreteWindow()
+/// of the request.
 AcceptanceDecision acceptMatch(const MatchResult& result, const SearchWindow& window,
                                const AcceptancePolicyOptions& options);
 
@@ -182,7 +183,6 @@ AcceptanceDecision acceptMatch(const MatchResult& result, const SearchWindow& wi
 /// options are valid (a non-finite search covariance falls back to the fixed sigmas).
 /// `certified` false raises the x, y, yaw floors to the uncertified_min_* sigmas.
 Matrix6d publishedPoseCovariance(const Eigen::Matrix3d& search_covariance_xyh,
-                                 const PoseCovariancePolicyOptions& options,
-                                 bool certified = true);
+                                 const PoseCovariancePolicyOptions& options, bool certified = true);
 
 }  // namespace gmm_localization

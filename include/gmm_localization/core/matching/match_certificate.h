@@ -41,8 +41,8 @@ namespace gmm_localization {
 
 struct CertificateOptions {
   bool enabled = true;
-  double exclusion_radius_m = 0.5;      ///< [m] "elsewhere" starts farther than this in x, y
-  double exclusion_heading_rad = 0.035; ///< [rad] (2 deg) or farther than this in heading
+  double exclusion_radius_m = 0.5;       ///< [m] "elsewhere" starts farther than this in x, y
+  double exclusion_heading_rad = 0.035;  ///< [rad] (2 deg) or farther than this in heading
   /// Score deficit of a plausible pose [nats per scan point] (see the header comment).
   double margin_per_point = 0.05;
   /// Separation is computed exactly up to this deficit [nats per scan point]; must be at
