@@ -9,6 +9,17 @@
 
 namespace gmm_localization {
 namespace node {
+namespace {
+
+/// Outcomes of a message dropped for its stamp (stale, too old, far ahead, or the one that
+/// reports time going backwards): worth a log line with the reason, they are counted in the
+/// filter's diagnostics.
+bool droppedForItsStamp(FuseOutcome o) {
+  return o == FuseOutcome::kRejectedStale || o == FuseOutcome::kRejectedTooOld ||
+         o == FuseOutcome::kTimeJumpedForward || o == FuseOutcome::kTimeWentBackwards;
+}
+
+}  // namespace
 
 std::optional<Eigen::Quaterniond> EkfNode::imuRotation(const std::string& frame) {
   if (frame.empty() || frame == options_.base_frame) return Eigen::Quaterniond::Identity();
@@ -63,6 +74,9 @@ void EkfNode::onImu(const sensor_msgs::Imu::ConstPtr& msg) {
   for (const FuseReport& r : filter_->addImu(*imu)) {
     if (r.outcome == FuseOutcome::kRejectedInvalid) {
       ROS_WARN_THROTTLE(5.0, "%s: %s", name_.c_str(), r.reason.c_str());
+    } else if (droppedForItsStamp(r.outcome)) {
+      ROS_WARN_THROTTLE(5.0, "%s: IMU message dropped (%s): %s", name_.c_str(),
+                        outcomeName(r.outcome), r.reason.c_str());
     }
   }
   handleEvents();
@@ -79,12 +93,20 @@ void EkfNode::onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
                       name_.c_str(), msg->child_frame_id.c_str(), options_.base_frame.c_str());
   }
   const OdometrySample sample = odometrySampleFromMsg(*msg);
-  if (sample.odom_T_base.matrix().allFinite()) last_odom_ = sample;
+  // A stale message (its stamp beyond the tolerance before the running filter) must not
+  // replace the newest pose either: map -> odom would fall back to a pose seconds old.
+  const bool stale =
+      filter_->active() &&
+      sample.stamp_s < filter_->ekf().time() - options_.ekf.time_backwards_tolerance_s;
+  if (sample.odom_T_base.matrix().allFinite() && !stale) last_odom_ = sample;
   if (!options_.use_odom_twist) return;
   const FuseReport r = filter_->addTwist(twistFromOdometryMsg(*msg));
   if (r.outcome == FuseOutcome::kRejectedInvalid) {
     ++bad_inputs_;
     ROS_WARN_THROTTLE(5.0, "%s: INS twist ignored: %s", name_.c_str(), r.reason.c_str());
+  } else if (droppedForItsStamp(r.outcome)) {
+    ROS_WARN_THROTTLE(5.0, "%s: INS odometry message dropped (%s): %s", name_.c_str(),
+                      outcomeName(r.outcome), r.reason.c_str());
   }
   handleEvents();
 }

@@ -33,12 +33,17 @@ void EkfNode::setupDiagnostics() {
     for (int i = 0; i < kMeasurementSourceCount; ++i) {
       const SourceCounters& c = d.sources[i];
       s.add(std::string(sourceName(static_cast<MeasurementSource>(i))) +
-                " fused / gated / invalid / too old / other",
+                " fused / gated / invalid / too old / stale / other",
             std::to_string(c.fused) + " / " + std::to_string(c.rejected_gate) + " / " +
                 std::to_string(c.rejected_invalid) + " / " + std::to_string(c.rejected_too_old) +
-                " / " + std::to_string(c.rejected_other));
+                " / " + std::to_string(c.rejected_stale) + " / " +
+                std::to_string(c.rejected_other));
     }
     s.add("delayed measurements", d.delayed_measurements);
+    // Messages dropped for their stamp (an IMU message counts once, whatever its parts).
+    s.add("far-future messages (time jumps)", d.time_forward_jump_events);
+    s.add("stale messages in a row", d.consecutive_stale);
+    s.add("time went backwards (reports)", d.time_backwards_events);
     s.add("stops (time went backwards or jumped)", filter_->stops());
     s.add("gate lockouts", filter_->lockouts());
     s.add("consecutive gated matches", filter_->consecutiveGateRejections());

@@ -34,6 +34,8 @@ EkfOptions loadEkfOptions(const ParamSource& nh) {
   o.max_history_entries = param(nh, "max_history_entries", o.max_history_entries);
   o.time_backwards_tolerance_s =
       param(nh, "time_backwards_tolerance_s", o.time_backwards_tolerance_s);
+  o.stale_reset_count = param(nh, "stale_reset_count", o.stale_reset_count);
+  o.time_backwards_reset_s = param(nh, "time_backwards_reset_s", o.time_backwards_reset_s);
   o.max_prediction_gap_s = param(nh, "max_prediction_gap_s", o.max_prediction_gap_s);
   o.max_prediction_step_s = param(nh, "max_prediction_step_s", o.max_prediction_step_s);
   o.gravity_mps2 = param(nh, "gravity_mps2", o.gravity_mps2);

@@ -2,6 +2,7 @@
 
 #include <sensor_msgs/PointCloud2.h>
 
+#include "gmm_localization/ros/map_server_load.h"
 #include "gmm_localization/ros/params.h"
 
 namespace gmm_localization {
@@ -30,6 +31,10 @@ MapServer::MapServer(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string&
   callbacks.on_held_changed = [this]() { onHeldChanged(); };
   callbacks.on_tile_error = [this](const TileId& t, const std::string& why) {
     onTileError(t, why);
+  };
+  callbacks.on_tile_recovered = [this](const TileId& t) {
+    ROS_INFO("%s: tile (%d, %d) loads again: the chunks served without it are rasterized again",
+             name_.c_str(), t.x, t.y);
   };
   const auto first_version = static_cast<uint64_t>(ros::WallTime::now().toNSec() / 1000000);
   auto engine =
@@ -75,19 +80,18 @@ void MapServer::onUpdate() {
   const CentreSelection where = locateVehicle();
   engine_->setCentres(where.centres);
   if (cloud_pub_.getNumSubscribers() > 0) publishMapCloud(where.centres);
+  resendIndexIfQuiet();
 }
 
 bool MapServer::onLoadMap(LoadMap::Request& req, LoadMap::Response& res) {
-  const Status s = engine_->switchMap(req.map_directory);
-  res.success = s.ok();
-  if (!s.ok()) {
-    res.message = "kept map '" + engine_->store()->directory() + "': " + s.error();
+  // Every tile of the new map is checked first: a truncated or CRC-broken one refuses the map.
+  const LoadMapOutcome outcome = loadMapDirectory(*engine_, req.map_directory);
+  res.success = outcome.success;
+  res.message = outcome.message;
+  if (!outcome.success) {
     ROS_ERROR("%s: load_map failed: %s", name_.c_str(), res.message.c_str());
     return true;
   }
-  const MapSummary m = engine_->mapSummary();
-  res.message = "serving map '" + req.map_directory + "' (" + std::to_string(m.tiles) +
-                " tiles), map_version " + std::to_string(engine_->mapVersion());
   ROS_INFO("%s: %s", name_.c_str(), res.message.c_str());
   {
     std::lock_guard<std::mutex> lock(msgs_mutex_);

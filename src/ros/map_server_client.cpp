@@ -1,15 +1,21 @@
 #include "gmm_localization/ros/map_server_client.h"
 
-#include <cmath>
+#include <iterator>
 #include <set>
 #include <sstream>
 
-#include "gmm_localization/core/map/map_format.h"
 #include "gmm_localization/ros/chunk_conversion.h"
 
 namespace gmm_localization {
 namespace node {
 namespace {
+
+/// The publisher's node name from a connection header; empty when there is none.
+std::string publisherOf(const boost::shared_ptr<ros::M_string>& header) {
+  if (!header) return {};
+  auto it = header->find("callerid");
+  return it == header->end() ? std::string() : it->second;
+}
 
 std::set<ChunkId> listed(const MapIndex& index) {
   std::set<ChunkId> ids;
@@ -19,68 +25,6 @@ std::set<ChunkId> listed(const MapIndex& index) {
 }
 
 }  // namespace
-
-MapGeometry geometryOf(const MapIndex& index) {
-  MapGeometry g;
-  g.resolution_m = index.resolution_m;
-  g.tile_size_cells = index.tile_size_cells;
-  g.origin_x_m = index.origin_x_m;
-  g.origin_y_m = index.origin_y_m;
-  return g;
-}
-
-RasterOptions rasterOptionsOf(const MapIndex& index) {
-  RasterOptions o;
-  o.z_step_m = index.z_step_m;
-  o.ll_floor = index.ll_floor;
-  o.ll_ceiling = index.ll_ceiling;
-  o.num_layers = index.num_layers;
-  o.z_coarsening_period = index.z_coarsening_period;
-  o.chunk_shift = index.chunk_shift;
-  return o;
-}
-
-std::string validateIndex(const MapIndex& index) {
-  const MapGeometry g = geometryOf(index);
-  const std::string geometry_error = checkMapGeometryBounds(g);
-  if (!geometry_error.empty()) return "invalid geometry: " + geometry_error;
-  const std::string raster_error = rasterOptionsOf(index).validate();
-  if (!raster_error.empty()) return "invalid raster options: " + raster_error;
-  if (index.chunk_x.size() != index.chunk_y.size()) {
-    return "chunk_x lists " + std::to_string(index.chunk_x.size()) + " ids, chunk_y " +
-           std::to_string(index.chunk_y.size());
-  }
-  // Every chunk within the map format's extent (one chunk of slack for chunks straddling it).
-  const double chunk_m = g.resolution_m * static_cast<double>(1 << index.chunk_shift);
-  const double max_chunk = (kMaxMapExtentM + chunk_m) / chunk_m;
-  for (size_t i = 0; i < index.chunk_x.size(); ++i) {
-    const double far_x =
-        std::max(std::abs(double(index.chunk_x[i])), std::abs(double(index.chunk_x[i]) + 1.0));
-    const double far_y =
-        std::max(std::abs(double(index.chunk_y[i])), std::abs(double(index.chunk_y[i]) + 1.0));
-    if (far_x > max_chunk || far_y > max_chunk) {
-      return "chunk (" + std::to_string(index.chunk_x[i]) + ", " +
-             std::to_string(index.chunk_y[i]) + ") lies beyond " + std::to_string(kMaxMapExtentM) +
-             " m of the map origin";
-    }
-  }
-  const double bound = kMaxMapExtentM + g.tileSizeM();
-  const double ext[] = {index.min_x_m - g.origin_x_m, index.max_x_m - g.origin_x_m,
-                        index.min_y_m - g.origin_y_m, index.max_y_m - g.origin_y_m};
-  for (double e : ext) {
-    if (!(std::abs(e) <= bound)) {
-      std::ostringstream s;
-      s << "map extent x [" << index.min_x_m << ", " << index.max_x_m << "], y [" << index.min_y_m
-        << ", " << index.max_y_m << "] m is not finite or beyond " << kMaxMapExtentM
-        << " m of the origin";
-      return s.str();
-    }
-  }
-  if (index.min_x_m > index.max_x_m || index.min_y_m > index.max_y_m) {
-    return "map extent has min > max";
-  }
-  return {};
-}
 
 bool MapServerClient::matchesIndex(const RasterChunk& msg, std::string* error) const {
   if (msg.shift != index_->chunk_shift) {
@@ -100,16 +44,50 @@ bool MapServerClient::matchesIndex(const RasterChunk& msg, std::string* error) c
   return true;
 }
 
+MapServerClient::MapServerClient(double publisher_timeout_s)
+    : publisher_timeout_s_(publisher_timeout_s > 0.0 ? publisher_timeout_s
+                                                     : kDefaultPublisherTimeoutS) {}
+
 MapServerClient::ChunkVerdict MapServerClient::onChunk(const RasterChunk::ConstPtr& msg,
                                                        std::string* error) {
+  return onChunk(msg, std::string(), ros::WallTime::now(), error);
+}
+
+MapServerClient::ChunkVerdict MapServerClient::onChunk(
+    const ros::MessageEvent<const RasterChunk>& event, std::string* error) {
+  return onChunk(event.getConstMessage(), publisherOf(event.getConnectionHeaderPtr()),
+                 ros::WallTime::now(), error);
+}
+
+MapServerClient::ChunkVerdict MapServerClient::onChunk(const RasterChunk::ConstPtr& msg,
+                                                       const std::string& publisher,
+                                                       ros::WallTime received, std::string* error) {
+  if (!msg) {
+    if (error) *error = "null chunk message";
+    return ChunkVerdict::kInvalid;
+  }
   auto chunk = fromMsg(msg);
   if (!chunk) {
     if (error) *error = chunk.error();
     return ChunkVerdict::kInvalid;
   }
   const ChunkId id{msg->chunk_x, msg->chunk_y};
+  const bool foreign = index_ && !publisher.empty() && publisher != publisher_;
+  if (foreign) {
+    // Kept for its own index only once the adopted server is gone (it may take over then).
+    if ((received - last_heard_).toSec() < publisher_timeout_s_) {
+      if (error) {
+        *error =
+            "chunk from '" + publisher + "', not from the adopted map server '" + publisher_ + "'";
+      }
+      return ChunkVerdict::kInvalid;
+    }
+    waiting_[msg->map_version][id] = {msg->header.stamp, *chunk, publisher};
+    return ChunkVerdict::kAdded;
+  }
+  if (index_ && !publisher.empty()) last_heard_ = received;
   if (!index_ || msg->map_version > index_->map_version) {
-    waiting_[msg->map_version][id] = {msg->header.stamp, *chunk};
+    waiting_[msg->map_version][id] = {msg->header.stamp, *chunk, publisher};
     return ChunkVerdict::kAdded;
   }
   if (msg->map_version < index_->map_version) {
@@ -121,12 +99,60 @@ MapServerClient::ChunkVerdict MapServerClient::onChunk(const RasterChunk::ConstP
     if (error) *error = "chunk evicted by a newer index";
     return ChunkVerdict::kStale;
   }
-  held_[id] = {msg->header.stamp, *chunk};
+  held_[id] = {msg->header.stamp, *chunk, publisher};
   map_.insert(*chunk);
   return ChunkVerdict::kAdded;
 }
 
 size_t MapServerClient::onIndex(const MapIndex::ConstPtr& index, std::string* error) {
+  return onIndex(index, std::string(), ros::WallTime::now(), error);
+}
+
+size_t MapServerClient::onIndex(const ros::MessageEvent<const MapIndex>& event,
+                                std::string* error) {
+  return onIndex(event.getConstMessage(), publisherOf(event.getConnectionHeaderPtr()),
+                 ros::WallTime::now(), error);
+}
+
+bool MapServerClient::mayAdopt(const MapIndex& index, const std::string& publisher,
+                               ros::WallTime received, std::string* error) {
+  if (!index_ || publisher == publisher_) return true;
+  const double silent_s = (received - last_heard_).toSec();
+  if (silent_s >= publisher_timeout_s_) return true;  // the adopted server is gone
+  // However new its version: one publisher must not outrank the server this client follows.
+  std::ostringstream why;
+  why.precision(3);
+  why << "map index of version " << index.map_version << " from '" << publisher
+      << "' ignored: the adopted map server '" << publisher_ << "' spoke " << silent_s
+      << " s ago (another publisher is adopted only after " << publisher_timeout_s_
+      << " s of silence)";
+  last_ignored_reason_ = why.str();
+  ++ignored_indices_;
+  if (error) *error = last_ignored_reason_;
+  return false;
+}
+
+void MapServerClient::keepWaitingFrom(const std::string& publisher) {
+  for (auto& [version, chunks] : waiting_) {
+    for (auto it = chunks.begin(); it != chunks.end();) {
+      const std::string& from = it->second.publisher;
+      it = !from.empty() && from != publisher ? chunks.erase(it) : std::next(it);
+    }
+  }
+}
+
+size_t MapServerClient::dropAdopted(const std::string& next_publisher) {
+  const size_t dropped = held_.size();
+  held_.clear();
+  index_.reset();
+  map_ = ChunkMap();
+  keepWaitingFrom(next_publisher);
+  ++publisher_switches_;
+  return dropped;
+}
+
+size_t MapServerClient::onIndex(const MapIndex::ConstPtr& index, const std::string& publisher,
+                                ros::WallTime received, std::string* error) {
   if (error) error->clear();
   if (!index) {
     if (error) *error = "null index message";
@@ -143,12 +169,20 @@ size_t MapServerClient::onIndex(const MapIndex::ConstPtr& index, std::string* er
     ++rejected_indices_;
     return 0;
   }
+  if (!mayAdopt(*index, publisher, received, error)) return 0;
+  size_t dropped = 0;
+  if (index_ && publisher != publisher_) {
+    dropped += dropAdopted(publisher);  // took over from a silent server: a new map
+  } else if (!index_) {
+    keepWaitingFrom(publisher);  // the first index: only its publisher's chunks may wait
+  }
+  publisher_ = publisher;
+  last_heard_ = received;
   if (index_ &&
       (index->map_version < index_->map_version ||
        (index->map_version == index_->map_version && index->header.stamp < index_->header.stamp))) {
     return 0;  // an older index than the one adopted
   }
-  size_t dropped = 0;
   const bool new_version = !index_ || index->map_version != index_->map_version;
   index_ = index;
   if (new_version) {

@@ -1,6 +1,8 @@
 // Diagnostics of the map server: the map and its tiles, the chunks, the vehicle's position.
 #include <diagnostic_msgs/DiagnosticStatus.h>
 
+#include <cstdio>
+
 #include "gmm_localization/ros/map_server.h"
 
 namespace gmm_localization {
@@ -8,6 +10,12 @@ namespace node {
 namespace {
 
 using diagnostic_msgs::DiagnosticStatus;
+
+std::string seconds(double s) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%g", s);
+  return buf;
+}
 
 std::string tileName(const TileId& t) {
   return "(" + std::to_string(t.x) + ", " + std::to_string(t.y) + ")";
@@ -29,6 +37,7 @@ void MapServer::setUpDiagnostics() {
     s.add("extent x [m]", std::to_string(m.min_x_m) + " .. " + std::to_string(m.max_x_m));
     s.add("extent y [m]", std::to_string(m.min_y_m) + " .. " + std::to_string(m.max_y_m));
     s.add("tile load errors", st.tile_errors.size());
+    s.add("chunks served without a bad tile", st.chunks_degraded);
     if (!st.tile_errors.empty()) {
       std::string names;
       size_t shown = 0;
@@ -39,7 +48,8 @@ void MapServer::setUpDiagnostics() {
       if (st.tile_errors.size() > shown) names += ", ...";
       s.summary(DiagnosticStatus::ERROR,
                 std::to_string(st.tile_errors.size()) +
-                    " tile(s) failed to load and are served as empty: " + names);
+                    " tile(s) failed to load and are served as empty (retried every " +
+                    seconds(options_.engine.tile_retry_period_s) + " s): " + names);
     } else {
       s.summary(DiagnosticStatus::OK, "map loaded");
     }

@@ -38,10 +38,12 @@ MapServerOptions loadMapServerOptions(const ParamSource& pnh) {
   e.tile_cache_radius_m = param(pnh, "tile_cache_radius_m", e.tile_cache_radius_m, 0.0, 2000.0);
   e.hysteresis_m = param(pnh, "hysteresis_m", e.hysteresis_m, 0.0, 1000.0);
   e.worker_threads = param(pnh, "worker_threads", e.worker_threads, 1, 16);
+  e.tile_retry_period_s = param(pnh, "tile_retry_period_s", e.tile_retry_period_s, 0.01, 86400.0);
   e.raster = loadRasterOptions(pnh);
   requireValid("map server options", e.validate());
 
   o.update_period_s = param(pnh, "update_period_s", o.update_period_s, 0.02, 10.0);
+  o.index_period_s = param(pnh, "index_period_s", o.index_period_s, 0.05, 60.0);
   o.pose_hint_hold_s = param(pnh, "pose_hint_hold_s", o.pose_hint_hold_s, 0.0, 3600.0);
   o.map_cloud_radius_m = param(pnh, "map_cloud_radius_m", o.map_cloud_radius_m, 0.0, 2000.0);
   o.map_cloud_period_s = param(pnh, "map_cloud_period_s", o.map_cloud_period_s, 0.05, 600.0);

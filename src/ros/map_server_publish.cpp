@@ -62,8 +62,9 @@ void MapServer::onHeldChanged() {
 }
 
 void MapServer::onTileError(const TileId& tile, const std::string& reason) {
-  ROS_ERROR_THROTTLE(5.0, "%s: skipping tile (%d, %d) (served as empty): %s", name_.c_str(), tile.x,
-                     tile.y, reason.c_str());
+  ROS_ERROR_THROTTLE(
+      5.0, "%s: skipping tile (%d, %d) (served as empty, tried again every %g s): %s",
+      name_.c_str(), tile.x, tile.y, options_.engine.tile_retry_period_s, reason.c_str());
 }
 
 void MapServer::publishIndex() {
@@ -97,7 +98,19 @@ void MapServer::publishIndex() {
   index->max_x_m = summary.max_x_m;
   index->max_y_m = summary.max_y_m;
   index->header.stamp = nextStamp();
-  index_pub_.publish(MapIndex::ConstPtr(index));
+  last_index_ = index;
+  last_index_time_ = ros::WallTime::now();
+  index_pub_.publish(last_index_);
+}
+
+void MapServer::resendIndexIfQuiet() {
+  std::lock_guard<std::mutex> publish(index_mutex_);
+  const ros::WallTime now = ros::WallTime::now();
+  if (!last_index_ || (now - last_index_time_).toSec() < options_.index_period_s) return;
+  // The same message, stamp included: a chunk published since has a later stamp than it, so
+  // the re-send can never look like an eviction to a subscriber (map_server_client.h).
+  last_index_time_ = now;
+  index_pub_.publish(last_index_);
 }
 
 void MapServer::onChunkSubscriber(const ros::SingleSubscriberPublisher& pub) {

@@ -52,11 +52,15 @@ void Matcher::setupDiagnostics() {
     size_t chunks = 0;
     uint64_t version = 0;
     bool have_index = false;
+    uint64_t ignored_indices = 0;
+    std::string map_publisher;
     {
       std::lock_guard<std::mutex> lock(map_mutex_);
       chunks = map_client_.chunks().size();
       version = map_client_.mapVersion();
       have_index = map_client_.hasIndex();
+      ignored_indices = map_client_.ignoredIndices();
+      map_publisher = map_client_.publisher();
     }
     uint64_t dropped_total = 0;
     {
@@ -92,6 +96,8 @@ void Matcher::setupDiagnostics() {
               fixed(last_window_.half_heading_rad * 180.0 / M_PI, 1));
     s.add("chunks held", chunks);
     s.add("map version", version);
+    s.add("map server followed", map_publisher);
+    s.add("map indices ignored (other publishers, invalid)", ignored_indices);
     s.add("dropped scans (total)", dropped_total);
     s.add("malformed or empty clouds", bad_clouds_);
     s.add("time went backwards (resets)", time_resets_);

@@ -60,10 +60,11 @@ void Matcher::onInitialPose(const geometry_msgs::PoseWithCovarianceStamped::Cons
            z_known ? "from the posterior" : "unknown");
 }
 
-void Matcher::onChunk(const RasterChunk::ConstPtr& msg) {
+void Matcher::onChunk(const ros::MessageEvent<const RasterChunk>& event) {
+  const RasterChunk::ConstPtr msg = event.getConstMessage();
   std::string error;
   std::lock_guard<std::mutex> lock(map_mutex_);
-  const auto verdict = map_client_.onChunk(msg, &error);
+  const auto verdict = map_client_.onChunk(event, &error);
   if (verdict == MapServerClient::ChunkVerdict::kInvalid) {
     ROS_WARN_THROTTLE(5.0, "%s: chunk (%d, %d) rejected: %s", name_.c_str(), msg->chunk_x,
                       msg->chunk_y, error.c_str());
@@ -75,11 +76,12 @@ void Matcher::onChunk(const RasterChunk::ConstPtr& msg) {
   }
 }
 
-void Matcher::onIndex(const MapIndex::ConstPtr& msg) {
+void Matcher::onIndex(const ros::MessageEvent<const MapIndex>& event) {
+  const MapIndex::ConstPtr msg = event.getConstMessage();
   std::lock_guard<std::mutex> lock(map_mutex_);
   const uint64_t previous = map_client_.mapVersion();
   std::string rejected;
-  const size_t dropped = map_client_.onIndex(msg, &rejected);
+  const size_t dropped = map_client_.onIndex(event, &rejected);
   if (!rejected.empty()) {
     ROS_WARN_THROTTLE(5.0, "%s: map index ignored (the current map stays in use): %s",
                       name_.c_str(), rejected.c_str());

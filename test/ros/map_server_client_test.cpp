@@ -1,5 +1,6 @@
 // The subscriber side of the map server's protocol (map_server_client.h): chunks and indices in
-// any delivery order, eviction by a newer index, map versions,.
+// any delivery order, eviction by a newer index, map versions, malformed indices, and one map
+// server at a time (a foreign publisher never outranks the adopted one while it speaks).
 #include "gmm_localization/ros/map_server_client.h"
 
 #include <cmath>
@@ -202,6 +203,117 @@ TEST(MapServerClient, MalformedIndexNeverReplacesTheAdoptedOne) {
   EXPECT_TRUE(validateIndex(*indexMsg(2, 6.0, {{-5, 7}})).empty());
   EXPECT_EQ(c.onIndex(nullptr, &why), 0u);
   EXPECT_FALSE(why.empty());
+}
+
+/// A copy of `msg` with a map version of its own (as a foreign publisher would send).
+RasterChunk::ConstPtr withVersion(const RasterChunk::ConstPtr& msg, uint64_t version) {
+  auto copy = boost::make_shared<RasterChunk>(*msg);
+  copy->map_version = version;
+  return copy;
+}
+
+ros::WallTime wall(double s) { return ros::WallTime(s); }
+
+TEST(MapServerClient, WellFormedForeignIndexNeverOutranksTheAdoptedServer) {
+  const std::string server = "/localization/localization_manager", intruder = "/intruder";
+  MapServerClient c(5.0);
+  ASSERT_EQ(c.onIndex(indexMsg(1, 1.0, {{0, 0}}), server, wall(100.0)), 0u);
+  ASSERT_EQ(c.onChunk(chunkMsg({0, 0}, 1, 2.0), server, wall(100.1)), V::kAdded);
+  ASSERT_TRUE(c.complete());
+  EXPECT_EQ(c.publisher(), server);
+
+  // One valid index from another publisher, with a far newer version: ignored, with a reason.
+  std::string why;
+  ASSERT_TRUE(validateIndex(*indexMsg(~uint64_t{0} - 1, 3.0, {{1, 0}})).empty());
+  EXPECT_EQ(c.onIndex(indexMsg(~uint64_t{0} - 1, 3.0, {{1, 0}}), intruder, wall(101.0), &why), 0u);
+  EXPECT_NE(why.find("ignored"), std::string::npos) << why;
+  EXPECT_NE(why.find(intruder), std::string::npos) << why;
+  EXPECT_NE(why.find(server), std::string::npos) << why;
+  EXPECT_EQ(c.lastIgnoredReason(), why);
+  EXPECT_EQ(c.ignoredIndices(), 1u);
+  EXPECT_EQ(c.rejectedIndices(), 0u) << "well-formed: ignored, not rejected";
+  EXPECT_EQ(c.mapVersion(), 1u);
+  EXPECT_EQ(c.publisher(), server);
+  EXPECT_TRUE(c.complete());
+  EXPECT_EQ(c.chunks().size(), 1u);
+  // Its chunks are refused too, whatever their version.
+  EXPECT_EQ(c.onChunk(withVersion(chunkMsg({1, 0}, 1, 3.5), ~uint64_t{0} - 1), intruder,
+                      wall(101.5), &why),
+            V::kInvalid);
+  EXPECT_NE(why.find("not from the adopted map server"), std::string::npos) << why;
+  EXPECT_EQ(c.onChunk(chunkMsg({1, 0}, 1, 3.6), intruder, wall(101.6), &why), V::kInvalid);
+  EXPECT_EQ(c.chunks().size(), 1u);
+
+  // The adopted server goes on: its chunks and indices are taken as before.
+  EXPECT_EQ(c.onChunk(chunkMsg({1, 0}, 1, 4.0), server, wall(102.0)), V::kAdded);
+  EXPECT_EQ(c.onIndex(indexMsg(1, 5.0, {{0, 0}, {1, 0}}), server, wall(102.5), &why), 0u);
+  EXPECT_TRUE(why.empty()) << why;
+  EXPECT_EQ(c.chunks().size(), 2u);
+  EXPECT_TRUE(c.complete());
+  // Within publisher_timeout_s of the server's last word, every foreign index is ignored.
+  EXPECT_EQ(c.onIndex(indexMsg(7, 6.0, {}), intruder, wall(107.0), &why), 0u);
+  EXPECT_EQ(c.ignoredIndices(), 2u);
+  EXPECT_EQ(c.mapVersion(), 1u);
+  EXPECT_EQ(c.publisherSwitches(), 0u);
+}
+
+TEST(MapServerClient, AnotherPublisherTakesOverOnlyAfterTheAdoptedOneFellSilent) {
+  const std::string old_server = "/old_manager", new_server = "/new_manager";
+  MapServerClient c(5.0);
+  ASSERT_EQ(c.onIndex(indexMsg(9, 1.0, {{0, 0}, {1, 0}}), old_server, wall(100.0)), 0u);
+  ASSERT_EQ(c.onChunk(chunkMsg({0, 0}, 9, 0.5), old_server, wall(100.0)), V::kAdded);
+  ASSERT_EQ(c.onChunk(chunkMsg({1, 0}, 9, 0.6), old_server, wall(100.0)), V::kAdded);
+  ASSERT_TRUE(c.complete());
+  // The old server is gone (silent 6 s): the new one's chunks may wait for its index, whose
+  // version may even be older than the old server's.
+  EXPECT_EQ(c.onChunk(chunkMsg({1, 0}, 3, 0.2), new_server, wall(106.0)), V::kAdded);
+  EXPECT_EQ(c.chunks().size(), 2u) << "the old map stays until the new index";
+  EXPECT_EQ(c.onIndex(indexMsg(3, 0.3, {{1, 0}}), new_server, wall(106.1)), 2u)
+      << "the old server's chunks are dropped";
+  EXPECT_EQ(c.publisher(), new_server);
+  EXPECT_EQ(c.publisherSwitches(), 1u);
+  EXPECT_EQ(c.mapVersion(), 3u);
+  EXPECT_TRUE(c.complete());
+  EXPECT_NE(c.chunks().find({1, 0}), nullptr);
+  EXPECT_EQ(c.chunks().find({0, 0}), nullptr);
+  // The old server coming back is now the foreign one.
+  std::string why;
+  EXPECT_EQ(c.onIndex(indexMsg(10, 9.0, {{0, 0}}), old_server, wall(107.0), &why), 0u);
+  EXPECT_NE(why.find(old_server), std::string::npos) << why;
+  EXPECT_EQ(c.mapVersion(), 3u);
+  // The adopted one restarting under its name (a newer version) is simply a new map.
+  EXPECT_EQ(c.onIndex(indexMsg(4, 9.5, {}), new_server, wall(108.0)), 1u);
+  EXPECT_EQ(c.mapVersion(), 4u);
+  EXPECT_EQ(c.publisherSwitches(), 1u);
+}
+
+TEST(MapServerClient, PublishersComeFromTheMessageEvents) {
+  auto event_index = [](const MapIndex::ConstPtr& m, const std::string& callerid) {
+    auto header = boost::make_shared<ros::M_string>();
+    (*header)["callerid"] = callerid;
+    return ros::MessageEvent<const MapIndex>(m, header, ros::Time(1.0));
+  };
+  auto event_chunk = [](const RasterChunk::ConstPtr& m, const std::string& callerid) {
+    auto header = boost::make_shared<ros::M_string>();
+    (*header)["callerid"] = callerid;
+    return ros::MessageEvent<const RasterChunk>(m, header, ros::Time(1.0));
+  };
+  MapServerClient c;
+  // A chunk of the foreign publisher waiting before any index is dropped when the server's
+  // index is adopted.
+  EXPECT_EQ(c.onChunk(event_chunk(chunkMsg({1, 0}, 2, 0.5), "/foreign")), V::kAdded);
+  EXPECT_EQ(c.onChunk(event_chunk(chunkMsg({0, 0}, 2, 0.6), "/server")), V::kAdded);
+  EXPECT_EQ(c.onIndex(event_index(indexMsg(2, 1.0, {{0, 0}, {1, 0}}), "/server")), 0u);
+  EXPECT_EQ(c.publisher(), "/server");
+  EXPECT_EQ(c.chunks().size(), 1u);
+  EXPECT_EQ(c.chunks().find({1, 0}), nullptr) << "the foreign chunk never entered the map";
+  std::string why;
+  EXPECT_EQ(c.onIndex(event_index(indexMsg(1000, 2.0, {}), "/foreign"), &why), 0u);
+  EXPECT_NE(why.find("/foreign"), std::string::npos) << why;
+  EXPECT_EQ(c.mapVersion(), 2u);
+  EXPECT_EQ(c.onChunk(event_chunk(chunkMsg({1, 0}, 2, 3.0), "/foreign"), &why), V::kInvalid);
+  EXPECT_EQ(c.onChunk(event_chunk(chunkMsg({1, 0}, 2, 3.0), "/server")), V::kAdded);
+  EXPECT_TRUE(c.complete());
 }
 
 }  // namespace

@@ -22,7 +22,11 @@
 //                twist covariances, at publish_rate_hz, only while the filter runs
 //   TF map->odom = map_T_base(t) * odom_T_base(t)^-1 with t the newest odom->base_link TF,
 //                stamped now, at the same rate
-// Time going backwards (a looping bag) stops the filter until an initial pose or a match;
+// A single message stamped stale (beyond time_backwards_tolerance_s) or far ahead is dropped
+// with a throttled warning naming the reason and counted in diagnostics; time going backwards
+// (a looping bag: a run of stale_reset_count stale messages, or one beyond
+// time_backwards_reset_s) or forward_jump_reset_count far-future messages in a row stop the
+// filter until an initial pose or a match;
 // consecutive gate rejections inflate the covariance (see LocalizationFilter). Nothing
 // non-finite is ever published. Callbacks and the timer run serialised on the nodelet's queue.
 

@@ -11,7 +11,9 @@
 //               already subscribes shares it and gets no re-send (subscribe once per process,
 //               e.g. through one MapServerClient).
 //   map_index   gmm_localization/MapIndex, latched, republished on every change: map version,
-//               geometry, raster options, the chunks held, their memory, the map's extent.
+//               geometry, raster options, the chunks held, their memory, the map's extent;
+//               re-sent unchanged (same stamp) every index_period_s otherwise, so subscribers
+//               know the server is alive (map_server_client.h: one map server at a time).
 //   map_cloud   sensor_msgs/PointCloud2 in map_frame, latched, built only while subscribed and
 //               rebuilt (at most every map_cloud_period_s) when the chunks change: one point per
 //               non-empty cell within map_cloud_radius_m (map_server_cloud.h); fields x y z
@@ -19,15 +21,19 @@
 //   pose_hint   (subscribed) geometry_msgs/PoseWithCovarianceStamped in map_frame, e.g. rviz's
 //               /initialpose: where to serve chunks while TF cannot say.
 // Service:
-//   load_map    gmm_localization/LoadMap: switch to another map directory. On success: a new
-//               map_version, chunks dropped and re-served; on failure the current map stays and
-//               `message` says why.
+//   load_map    gmm_localization/LoadMap: switch to another map directory (or reload this
+//               one). Every tile is read first (map_server_load.h): a directory whose tiles are
+//               missing, truncated or CRC-broken is refused, `message` naming the tiles and the
+//               reasons, and the current map stays. On success: a new map_version, chunks
+//               dropped and re-served.
 // Subscribers follow the protocol of map_server_client.h (stamps from one increasing clock;
 // the index is the authority on what is held). map_version starts at the wall-clock time of
 // start-up in milliseconds, so that a restarted server never repeats a version.
 //
 // Vehicle position: TF map_frame -> base_frame (latest), else pose_hint, else the configured
 // initial position (core/raster/chunk_planner.h, selectCentres), polled every update_period_s.
+// Tiles that fail to load are served as empty and retried every tile_retry_period_s
+// (chunk_engine.h): a restored directory heals without a reload.
 // Diagnostics (/diagnostics): map (version, tiles, extent, tile load errors: ERROR naming the
 // tiles), chunks (held, pending, memory, rasterization times), vehicle position (source;
 // WARN when unknown or outside the map's extent).
@@ -79,6 +85,8 @@ class MapServer {
   void onHeldChanged();
   void onTileError(const TileId& tile, const std::string& reason);
   void publishIndex();
+  /// Re-sends the last index when none went out for index_period_s (a heartbeat).
+  void resendIndexIfQuiet();
   void onChunkSubscriber(const ros::SingleSubscriberPublisher& pub);
   void publishMapCloud(const std::vector<PlanCentre>& centres);
   ros::Time nextStamp();
@@ -119,7 +127,9 @@ class MapServer {
   CentreSelection centres_;
   std::string tf_error_;
 
-  std::mutex index_mutex_;  // serialises index publications
+  std::mutex index_mutex_;  // serialises index publications; guards the two below
+  MapIndex::ConstPtr last_index_;
+  ros::WallTime last_index_time_;
 
   std::unique_ptr<ChunkEngine> engine_;  // last member: destroyed first, stopping the workers
 };

@@ -17,11 +17,25 @@
 // An index is validated before it is adopted (validateIndex): a malformed one (e.g. resolution 0,
 // layer counts the raster options reject, extents beyond the map format's physical bounds) is
 // rejected with a reason and never replaces the adopted index, whatever its map_version.
+//
+// One map server at a time: the publisher (callerid) of the first valid index is adopted, and
+// map_version only orders the indices of that publisher. A well-formed index from any other
+// publisher is ignored with a reason (ignoredIndices(), lastIgnoredReason()), however new its
+// version, as long as the adopted publisher has spoken (a valid index or chunk) within
+// publisher_timeout_s of wall time; after that silence (the server is gone) the next valid
+// index from another publisher takes over, as a new map. Chunks from a known publisher other
+// than the adopted one are rejected (kInvalid). The map server re-sends its latched index
+// every index_period_s (map_server.h) so that a live server is never silent that long.
+// Publishers are known through the ros::MessageEvent overloads (subscribe with
+// `void cb(const ros::MessageEvent<const MapIndex>&)`); the ConstPtr overloads carry no
+// publisher: all their messages count as one unnamed publisher (the rules above then reduce to
+// the map_version order).
 
 #include <map>
 #include <string>
 #include <vector>
 
+#include <ros/message_event.h>
 #include <ros/time.h>
 
 #include "gmm_localization/MapIndex.h"
@@ -50,17 +64,44 @@ class MapServerClient {
   enum class ChunkVerdict {
     kAdded,    ///< now in chunks() (or waiting for its index, for a newer version)
     kStale,    ///< older map version, or already evicted by a newer index: ignored
-    kInvalid,  ///< fromMsg failed or the chunk disagrees with the index: ignored
+    kInvalid,  ///< fromMsg failed, the chunk disagrees with the index, or it comes from a
+               ///< publisher other than the adopted map server: ignored
   };
+
+  /// Wall time the adopted map server must have been silent before another publisher's index
+  /// is adopted [s]: several of the server's index_period_s (1 s by default).
+  static constexpr double kDefaultPublisherTimeoutS = 5.0;
+  /// publisher_timeout_s: see kDefaultPublisherTimeoutS (a value that is not > 0 takes it).
+  explicit MapServerClient(double publisher_timeout_s = kDefaultPublisherTimeoutS);
 
   /// error (optional) receives the reason for kInvalid / kStale.
   ChunkVerdict onChunk(const RasterChunk::ConstPtr& msg, std::string* error = nullptr);
-  /// Adopts the index unless it is invalid (validateIndex) or older than the adopted one;
-  /// returns the number of chunks dropped by it. error (optional) receives the reason when the
-  /// index is rejected as invalid (for a throttled warning), and is cleared otherwise.
+  /// The same, knowing the publisher (getPublisherName) and the wall time of receipt.
+  ChunkVerdict onChunk(const ros::MessageEvent<const RasterChunk>& event,
+                       std::string* error = nullptr);
+  /// `publisher` empty: unknown (always accepted, never refreshes the adopted one's silence).
+  ChunkVerdict onChunk(const RasterChunk::ConstPtr& msg, const std::string& publisher,
+                       ros::WallTime received, std::string* error = nullptr);
+
+  /// Adopts the index unless it is invalid (validateIndex), from a publisher other than the
+  /// adopted one (see the file comment), or older than the adopted one; returns the number of
+  /// chunks dropped by it. error (optional) receives the reason when the index is rejected as
+  /// invalid or ignored as foreign (for a throttled warning), and is cleared otherwise.
   size_t onIndex(const MapIndex::ConstPtr& index, std::string* error = nullptr);
+  /// The same, knowing the publisher (getPublisherName) and the wall time of receipt.
+  size_t onIndex(const ros::MessageEvent<const MapIndex>& event, std::string* error = nullptr);
+  size_t onIndex(const MapIndex::ConstPtr& index, const std::string& publisher,
+                 ros::WallTime received, std::string* error = nullptr);
   /// Indices rejected as invalid so far.
   size_t rejectedIndices() const { return rejected_indices_; }
+  /// Well-formed indices ignored so far because another publisher is adopted.
+  size_t ignoredIndices() const { return ignored_indices_; }
+  /// Why the last one was ignored (empty when none was).
+  const std::string& lastIgnoredReason() const { return last_ignored_reason_; }
+  /// The adopted map server (callerid; empty before the first index or when unknown).
+  const std::string& publisher() const { return publisher_; }
+  /// Times another publisher took over after the adopted one fell silent.
+  size_t publisherSwitches() const { return publisher_switches_; }
 
   bool hasIndex() const { return index_ != nullptr; }
   const MapIndex::ConstPtr& index() const { return index_; }
@@ -74,11 +115,26 @@ class MapServerClient {
   struct Held {
     ros::Time stamp;
     MapChunkConstPtr chunk;
+    std::string publisher;  ///< empty: unknown
   };
   bool matchesIndex(const RasterChunk& msg, std::string* error) const;
+  /// Whether an index from `publisher` may be adopted now; else why not (error).
+  bool mayAdopt(const MapIndex& index, const std::string& publisher, ros::WallTime received,
+                std::string* error);
+  /// Drops the waiting chunks of known publishers other than `publisher`.
+  void keepWaitingFrom(const std::string& publisher);
+  /// Forgets the adopted server and everything it sent (another one takes over); returns the
+  /// number of chunks dropped.
+  size_t dropAdopted(const std::string& next_publisher);
 
+  double publisher_timeout_s_;
   MapIndex::ConstPtr index_;
+  std::string publisher_;
+  ros::WallTime last_heard_;  ///< last valid index or chunk from publisher_
   size_t rejected_indices_ = 0;
+  size_t ignored_indices_ = 0;
+  size_t publisher_switches_ = 0;
+  std::string last_ignored_reason_;
   ChunkMap map_;
   std::map<ChunkId, Held> held_;
   /// Chunks whose version has no index yet: version -> id -> chunk.

@@ -21,6 +21,9 @@ struct MapServerOptions {
   /// Radii, hysteresis, raster options and worker threads (core/raster/chunk_engine.h).
   ChunkEngineOptions engine;
   double update_period_s = 0.5;  ///< vehicle position lookup and index refresh period [s]
+  /// The latched index is re-sent, unchanged, at least this often [s]: subscribers tell a live
+  /// server from a gone one by it (MapServerClient's publisher timeout, 5 s by default).
+  double index_period_s = 1.0;
   /// Served before any TF or pose hint exists (map frame [m]); unset: wait for a position.
   std::optional<PlanCentre> initial_position;
   double pose_hint_hold_s = 10.0;    ///< a pose hint is served beside TF this long [s]

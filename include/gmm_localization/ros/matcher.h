@@ -75,8 +75,9 @@ class Matcher {
   void onOdom(const nav_msgs::Odometry::ConstPtr& msg);
   void onPosterior(const nav_msgs::Odometry::ConstPtr& msg);
   void onInitialPose(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg);
-  void onChunk(const RasterChunk::ConstPtr& msg);
-  void onIndex(const MapIndex::ConstPtr& msg);
+  // With the publisher: the client follows one map server and ignores the others.
+  void onChunk(const ros::MessageEvent<const RasterChunk>& event);
+  void onIndex(const ros::MessageEvent<const MapIndex>& event);
   // matcher_worker.cpp: scan intake, the worker, one scan's processing.
   void onScan(const sensor_msgs::PointCloud2::ConstPtr& msg);
   void workerLoop();

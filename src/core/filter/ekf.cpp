@@ -32,6 +32,12 @@ std::string timeReason(const char* what, double stamp_s, double filter_time_s, d
   return s.str();
 }
 
+std::string number(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
 template <typename Matrix>
 double largestSigma(const Matrix& c) {
   Eigen::SelfAdjointEigenSolver<Matrix> es;
@@ -87,6 +93,7 @@ Status Ekf::reset(const Eigen::Isometry3d& map_T_base, const Matrix6d& pose_cova
   history_.clear(*s);
   initialized_ = true;
   ++diagnostics_.resets;
+  diagnostics_.consecutive_stale = 0;  // a new time line
   // A new pose starts a new gating history: rejections in a row refer to the old estimate.
   for (SourceCounters& c : diagnostics_.sources) c.consecutive_gate_rejections = 0;
   return Status::success();
@@ -109,6 +116,7 @@ Status Ekf::setPose(const Eigen::Isometry3d& map_T_base, const Matrix6d& pose_co
   s.P.topLeftCorner<6, 6>() = pose->P.topLeftCorner<6, 6>();
   history_.clear(s);
   ++diagnostics_.resets;
+  diagnostics_.consecutive_stale = 0;
   for (SourceCounters& c : diagnostics_.sources) c.consecutive_gate_rejections = 0;
   return Status::success();
 }
@@ -119,15 +127,31 @@ double Ekf::time() const {
 
 std::vector<FuseReport> Ekf::processImu(const ImuMeasurement& imu) {
   std::vector<FuseReport> reports;
-  if (imu.has_orientation && options_.imu_use_orientation) {
+  const bool orientation = imu.has_orientation && options_.imu_use_orientation;
+  const bool rates = imu.has_angular_velocity && options_.imu_use_angular_velocity;
+  const bool acceleration = imu.has_linear_acceleration && options_.imu_use_linear_acceleration;
+  if (!orientation && !rates && !acceleration) return reports;
+  // The parts share the message's stamp: judge it once, so that one message stamped far ahead
+  // (or stale) is one forward jump (or one stale drop) for the caller's counters, not three.
+  if (initialized_ && std::isfinite(imu.stamp_s)) {
+    const MeasurementSource first = orientation ? MeasurementSource::kImuOrientation
+                                    : rates     ? MeasurementSource::kImuAngularVelocity
+                                                : MeasurementSource::kImuLinearAcceleration;
+    if (std::optional<FuseReport> rejected = checkStamp(first, imu.stamp_s)) {
+      count(*rejected);
+      reports.push_back(std::move(*rejected));
+      return reports;
+    }
+  }
+  if (orientation) {
     reports.push_back(process(makeImuOrientationMeasurement(imu, options_),
                               MeasurementSource::kImuOrientation, imu.stamp_s));
   }
-  if (imu.has_angular_velocity && options_.imu_use_angular_velocity) {
+  if (rates) {
     reports.push_back(process(makeImuAngularVelocityMeasurement(imu, options_),
                               MeasurementSource::kImuAngularVelocity, imu.stamp_s));
   }
-  if (imu.has_linear_acceleration && options_.imu_use_linear_acceleration) {
+  if (acceleration) {
     reports.push_back(process(makeImuAccelerationMeasurement(imu, options_),
                               MeasurementSource::kImuLinearAcceleration, imu.stamp_s));
   }
@@ -142,31 +166,59 @@ FuseReport Ekf::processPose(const PoseMeasurement& pose) {
   return process(makePoseMeasurement(pose, options_), MeasurementSource::kPose, pose.stamp_s);
 }
 
+std::optional<FuseReport> Ekf::checkStamp(MeasurementSource source, double stamp_s) {
+  const double latest = history_.latest().time_s;
+  const double behind = latest - stamp_s;
+  if (behind > options_.time_backwards_tolerance_s) {
+    // Stale. One such message is a glitch (a late driver buffer, a bad stamp) and is dropped;
+    // a run of them, or one older than any sensor delay, is a clock that went back.
+    int& run = diagnostics_.consecutive_stale;
+    ++run;
+    std::string reason = timeReason("before", stamp_s, latest, options_.time_backwards_tolerance_s,
+                                    "time_backwards_tolerance_s");
+    if (behind > options_.time_backwards_reset_s || run >= options_.stale_reset_count) {
+      ++diagnostics_.time_backwards_events;
+      reason +=
+          behind > options_.time_backwards_reset_s
+              ? ", more than time_backwards_reset_s = " + number(options_.time_backwards_reset_s) +
+                    " s"
+              : ", " + std::to_string(run) + " stale messages in a row (stale_reset_count)";
+      return rejection(source, stamp_s, FuseOutcome::kTimeWentBackwards,
+                       reason + ": time went backwards; reset the filter");
+    }
+    return rejection(source, stamp_s, FuseOutcome::kRejectedStale,
+                     reason + ": stale message dropped (" + std::to_string(run) + " in a row; " +
+                         std::to_string(options_.stale_reset_count) +
+                         " in a row mean time went backwards)");
+  }
+  diagnostics_.consecutive_stale = 0;  // a message within the tolerance ends a stale run
+  if (stamp_s < latest - options_.history_length_s || stamp_s < history_.base().time_s) {
+    return rejection(
+        source, stamp_s, FuseOutcome::kRejectedTooOld,
+        timeReason("before", stamp_s, latest, options_.history_length_s, "history_length_s") +
+            ", or before the oldest stored state / last reset");
+  }
+  if (stamp_s - latest > options_.max_prediction_gap_s) {
+    ++diagnostics_.time_forward_jump_events;
+    return rejection(source, stamp_s, FuseOutcome::kTimeJumpedForward,
+                     timeReason("after", stamp_s, latest, options_.max_prediction_gap_s,
+                                "max_prediction_gap_s") +
+                         "; reset the filter after a run of them");
+  }
+  return std::nullopt;
+}
+
 FuseReport Ekf::process(const Result<EkfMeasurement>& m, MeasurementSource source, double stamp_s) {
   FuseReport report;
   const double latest = history_.latest().time_s;
+  std::optional<FuseReport> out_of_time;
   if (!m) {
     report = rejection(source, stamp_s, FuseOutcome::kRejectedInvalid, m.error());
   } else if (!initialized_) {
     report = rejection(source, stamp_s, FuseOutcome::kRejectedNotInitialized,
                        "filter not initialized: call reset() first");
-  } else if (stamp_s < latest - options_.time_backwards_tolerance_s) {
-    report = rejection(source, stamp_s, FuseOutcome::kTimeWentBackwards,
-                       timeReason("before", stamp_s, latest, options_.time_backwards_tolerance_s,
-                                  "time_backwards_tolerance_s") +
-                           "; reset the filter");
-    ++diagnostics_.time_backwards_events;
-  } else if (stamp_s < latest - options_.history_length_s || stamp_s < history_.base().time_s) {
-    report = rejection(
-        source, stamp_s, FuseOutcome::kRejectedTooOld,
-        timeReason("before", stamp_s, latest, options_.history_length_s, "history_length_s") +
-            ", or before the oldest stored state / last reset");
-  } else if (stamp_s - latest > options_.max_prediction_gap_s) {
-    report = rejection(source, stamp_s, FuseOutcome::kTimeJumpedForward,
-                       timeReason("after", stamp_s, latest, options_.max_prediction_gap_s,
-                                  "max_prediction_gap_s") +
-                           "; reset the filter");
-    ++diagnostics_.time_forward_jump_events;
+  } else if ((out_of_time = checkStamp(source, stamp_s))) {
+    report = std::move(*out_of_time);
   } else if (stamp_s >= latest) {
     report = fuseAfter(*m, history_.latest());
   } else {
@@ -231,6 +283,9 @@ void Ekf::count(const FuseReport& r) {
       break;
     case FuseOutcome::kRejectedTooOld:
       ++c.rejected_too_old;
+      break;
+    case FuseOutcome::kRejectedStale:
+      ++c.rejected_stale;
       break;
     default:
       ++c.rejected_other;

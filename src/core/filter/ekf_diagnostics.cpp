@@ -20,6 +20,8 @@ const char* outcomeName(FuseOutcome outcome) {
       return "time_went_backwards";
     case FuseOutcome::kTimeJumpedForward:
       return "time_jumped_forward";
+    case FuseOutcome::kRejectedStale:
+      return "rejected_stale";
   }
   return "unknown";
 }

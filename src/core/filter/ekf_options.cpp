@@ -42,6 +42,9 @@ Status EkfOptions::validate() const {
       inRange("max_history_entries", max_history_entries, 10, 1e6, false, &why) &&
       inRange("time_backwards_tolerance_s", time_backwards_tolerance_s, history_length_s, 1e6,
               false, &why) &&
+      inRange("stale_reset_count", stale_reset_count, 1, 1e6, false, &why) &&
+      inRange("time_backwards_reset_s", time_backwards_reset_s, time_backwards_tolerance_s, 1e6,
+              false, &why) &&
       inRange("max_prediction_gap_s", max_prediction_gap_s, 0.0, 3600.0, true, &why) &&
       inRange("max_prediction_step_s", max_prediction_step_s, 1e-4, 1.0, false, &why) &&
       inRange("gravity_mps2", gravity_mps2, 9.7, 9.9, false, &why) &&

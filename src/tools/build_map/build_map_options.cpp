@@ -7,10 +7,25 @@
 #include <map>
 #include <sstream>
 
+#include "gmm_localization/core/map/map_format.h"
+
 namespace gmm_localization {
 namespace tools {
+namespace {
 
-const char* buildMapHelp() {
+std::string text(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+/// The cell sizes a map may have: the map format's bounds (map_format.h), which the manifest
+/// reader enforces, so that build_map never writes a map the map server cannot open.
+std::string resolutionRange() {
+  return "[" + text(kMinMapResolutionM) + ", " + text(kMaxMapResolutionM) + "] m";
+}
+
+const char* helpTemplate() {
   return R"(build_map: build a Gaussian mixture map (Wolcott & Eustice 2015, section III) from LIDAR data.
 
 Usage: build_map --output DIR INPUT [options]
@@ -62,7 +77,7 @@ Output:
                            in when complete; a failed or killed build leaves the old map intact
 
 Map (defaults follow the paper):
-  --resolution M           cell size (0.2)
+  --resolution M           cell size, in @RESOLUTION_RANGE@ (0.2)
   --tile-size N            cells per tile edge (320)
   --origin X,Y             map-frame corner of cell (0, 0) (0,0)
   --k-max K                most Gaussians per cell, 1..3 (2)
@@ -91,6 +106,18 @@ Resources:
   --quiet                  no progress bar
   --help
 )";
+}
+
+}  // namespace
+
+const char* buildMapHelp() {
+  static const std::string help = [] {
+    std::string h = helpTemplate();
+    const std::string key = "@RESOLUTION_RANGE@";
+    h.replace(h.find(key), key.size(), resolutionRange());
+    return h;
+  }();
+  return help.c_str();
 }
 
 Result<std::vector<double>> parseNumberList(const std::string& option, const std::string& text,
@@ -364,6 +391,15 @@ Result<BuildMapConfig> parseBuildMapArgs(int argc, char** argv) {
     b.georeference.origin_northing_m = c.offset_m.y();
     b.georeference.origin_up_m = c.offset_m.z();
   }
+  // The map format's bounds, checked here so that a build never ends in a manifest the reader
+  // refuses (or a grid of 1e12 cells): one source of truth, checkMapGeometryBounds.
+  const double resolution = b.geometry.resolution_m;
+  if (!(resolution >= kMinMapResolutionM && resolution <= kMaxMapResolutionM)) {
+    return R::failure("--resolution " + text(resolution) + " m is outside the map format's range " +
+                      resolutionRange());
+  }
+  const std::string bounds = checkMapGeometryBounds(b.geometry);
+  if (!bounds.empty()) return R::failure("map geometry (--tile-size, --origin): " + bounds);
   const std::string invalid = b.validate();
   if (!invalid.empty()) return R::failure("invalid options: " + invalid);
   return c;

@@ -386,5 +386,20 @@ TEST(BuildMapOverwriteFullDisk, RunsOutOfSpaceAndKeepsTheOldMap) {
   EXPECT_NE(snapshot(dir).at(kManifestFileName), old.at(kManifestFileName));
 }
 
+TEST(BuildMapCli, ResolutionOutsideTheMapFormatFailsAtOnceWithTheRange) {
+  // 5e-4 m cells passed the builder's own check (> 0) and ended in a manifest the map format
+  // refuses (after a build over a grid 160 000 times the size of the 0.2 m one).
+  TempDir work;
+  const std::string dir = work.path + "/map";
+  const auto t0 = Clock::now();
+  const RunOutcome r = run(buildMapArgs(dir, 1, {"--resolution", "5e-4"}), work.path + "/log");
+  EXPECT_FALSE(r.killed);
+  EXPECT_NE(r.exit_code, 0) << r.log;
+  EXPECT_NE(r.log.find("--resolution"), std::string::npos) << r.log;
+  EXPECT_NE(r.log.find("[0.05, 10] m"), std::string::npos) << r.log;
+  EXPECT_LT(std::chrono::duration<double>(Clock::now() - t0).count(), 10.0) << "refused up front";
+  EXPECT_FALSE(fs::exists(dir + "/" + kManifestFileName));
+}
+
 }  // namespace
 }  // namespace gmm_localization

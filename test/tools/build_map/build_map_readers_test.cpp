@@ -9,12 +9,14 @@
 
 #include <cstring>
 #include <filesystem>
+#include <sstream>
 
 #include <gtest/gtest.h>
 
 #include "build_map/build_map_options.h"
 #include "build_map/build_map_readers.h"
 #include "build_map/build_map_synthetic.h"
+#include "gmm_localization/core/map/map_format.h"
 
 namespace gmm_localization {
 namespace tools {
@@ -213,6 +215,31 @@ TEST(BuildMapArgs, ParsesAndRejects) {
   ASSERT_TRUE(t.ok());
   EXPECT_NEAR((t->linear() * Eigen::Vector3d::UnitX()).y(), 1.0, 1e-12);
   EXPECT_FALSE(parseTransform("--extrinsic", "1,2,x").ok());
+}
+
+TEST(BuildMapArgs, ResolutionIsBoundedByTheMapFormat) {
+  // The manifest reader refuses cells outside [kMinMapResolutionM, kMaxMapResolutionM]: the
+  // command line must refuse them before a build that could never be served.
+  auto parse = [](const std::string& resolution) {
+    const char* argv[] = {"build_map", "--output",     "/tmp/m",          "--pcd",
+                          "a.pcd",     "--resolution", resolution.c_str()};
+    return parseBuildMapArgs(7, const_cast<char**>(argv));
+  };
+  for (const char* bad : {"5e-4", "0.0499", "10.5", "0", "-0.2", "1e300"}) {
+    auto c = parse(bad);
+    ASSERT_FALSE(c.ok()) << bad;
+    EXPECT_NE(c.error().find("--resolution"), std::string::npos) << c.error();
+    EXPECT_NE(c.error().find("[0.05, 10] m"), std::string::npos) << c.error();
+  }
+  for (double good : {kMinMapResolutionM, 0.2, kMaxMapResolutionM}) {
+    std::ostringstream text;
+    text.precision(17);
+    text << good;
+    auto c = parse(text.str());
+    ASSERT_TRUE(c.ok()) << good << ": " << c.error();
+    EXPECT_EQ(c->builder.geometry.resolution_m, good);
+    EXPECT_TRUE(checkMapGeometryBounds(c->builder.geometry).empty()) << "the format accepts it";
+  }
 }
 
 TEST(SyntheticStreet, DeterministicLidarLikeScans) {

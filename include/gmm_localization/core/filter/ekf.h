@@ -10,8 +10,11 @@
 // - Measurements may arrive late: a stamp older than the filter time but within
 //   EkfOptions::history_length_s is inserted in stamp order and the later measurements re-fused,
 //   giving the same result (to rounding) as in-order delivery. Older ones are rejected
-//   (kRejectedTooOld); much older ones report kTimeWentBackwards (a looping bag) and the caller
-//   should reset(); stamps too far ahead report kTimeJumpedForward.
+//   (kRejectedTooOld). A stamp older than time_backwards_tolerance_s is stale: dropped
+//   (kRejectedStale) unless it ends a run of stale_reset_count stale messages or is older than
+//   time_backwards_reset_s, which report kTimeWentBackwards (a looping bag) and the caller
+//   should reset(); stamps too far ahead report kTimeJumpedForward. Time is judged once per
+//   message: an IMU message stamped out of time gives one report, not one per part.
 // - Every input is validated; an invalid one is rejected with a reason and never touches the
 //   state. A valid measurement rejected by the Mahalanobis gate (or as numerically unusable)
 //   still advances the filter time to its stamp (the prediction is kept) and stays in the
@@ -21,6 +24,7 @@
 // - Not thread-safe: one caller thread (the nodelet serialises its callbacks) or a lock.
 
 #include <array>
+#include <optional>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -61,7 +65,9 @@ class Ekf {
 
   /// Fuses the used parts of an IMU sample in the order orientation, angular velocity,
   /// acceleration (so gravity removal sees the updated roll/pitch): one report per part that is
-  /// present and enabled; empty when there is none.
+  /// present and enabled; empty when there is none. A message whose stamp is out of time
+  /// (stale, backwards, too far ahead) gives one report for the whole message (its first part's
+  /// source), so callers counting time jumps count messages.
   std::vector<FuseReport> processImu(const ImuMeasurement& imu);
   /// Fuses an odometry body twist.
   FuseReport processTwist(const TwistMeasurement& twist);
@@ -89,6 +95,9 @@ class Ekf {
 
   // Time checks, insertion (with replay when late), counting.
   FuseReport process(const Result<EkfMeasurement>& m, MeasurementSource source, double stamp_s);
+  // The time rules for one message at stamp_s (initialized filter): a rejection report, or
+  // nothing when the stamp may be fused. Keeps the run of stale messages.
+  std::optional<FuseReport> checkStamp(MeasurementSource source, double stamp_s);
   // Predicts a copy of `from` to m's stamp, updates it, appends the entry; returns the report.
   FuseReport fuseAfter(const EkfMeasurement& m, const EkfState& from);
   double gateThresholdSq(MeasurementSource source, int dimension) const;

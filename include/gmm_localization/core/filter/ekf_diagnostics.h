@@ -19,10 +19,13 @@ enum class FuseOutcome {
   kRejectedNotInitialized,  ///< no reset() yet
   kRejectedNumerical,       ///< innovation covariance not positive definite, or the update
                             ///< would have produced a non-finite state; state left unchanged
-  kTimeWentBackwards,       ///< stamp earlier than the filter time by more than
-                            ///< time_backwards_tolerance_s: the caller should reset()
+  kTimeWentBackwards,       ///< a run of stale_reset_count stale stamps, or one more than
+                            ///< time_backwards_reset_s before the filter time: the caller
+                            ///< should reset()
   kTimeJumpedForward,       ///< stamp later than the filter time by more than
-                            ///< max_prediction_gap_s: the caller should reset()
+                            ///< max_prediction_gap_s: the caller should reset() after a run
+  kRejectedStale,           ///< stamp earlier than the filter time by more than
+                            ///< time_backwards_tolerance_s, not (yet) a run: dropped
 };
 
 /// Short name of an outcome ("fused", "rejected_gate", ...).
@@ -49,6 +52,7 @@ struct SourceCounters {
   uint64_t rejected_gate = 0;
   uint64_t rejected_invalid = 0;
   uint64_t rejected_too_old = 0;
+  uint64_t rejected_stale = 0;               ///< beyond time_backwards_tolerance_s, dropped
   uint64_t rejected_other = 0;               ///< not initialized, numerical, time jumps
   uint64_t consecutive_gate_rejections = 0;  ///< reset by the next fused one of this source
   double last_mahalanobis_sq = NAN;
@@ -57,11 +61,12 @@ struct SourceCounters {
 
 struct EkfDiagnostics {
   std::array<SourceCounters, kMeasurementSourceCount> sources{};
-  uint64_t delayed_measurements = 0;   ///< arrived older than the newest fused stamp
-  uint64_t replayed_measurements = 0;  ///< re-fusions caused by those
-  uint64_t time_backwards_events = 0;
-  uint64_t time_forward_jump_events = 0;
-  uint64_t resets = 0;  ///< reset() and setPose() calls that succeeded
+  uint64_t delayed_measurements = 0;      ///< arrived older than the newest fused stamp
+  uint64_t replayed_measurements = 0;     ///< re-fusions caused by those
+  uint64_t time_backwards_events = 0;     ///< kTimeWentBackwards reports
+  uint64_t time_forward_jump_events = 0;  ///< kTimeJumpedForward reports (one per message)
+  int consecutive_stale = 0;              ///< current run of stale messages
+  uint64_t resets = 0;                    ///< reset() and setPose() calls that succeeded
   std::size_t history_entries = 0;
   double history_span_s = 0.0;  ///< newest minus oldest stored time
   /// sqrt of the largest eigenvalue of the x, y, z covariance [m] (NaN when not initialized).

@@ -34,9 +34,20 @@ struct EkfOptions {
   /// Upper bound on the number of stored history entries, range [10, 1000000]. Bounds memory
   /// (about 2 kB per entry) when sensors run faster than expected; the oldest go first.
   int max_history_entries = 10000;
-  /// A stamp older than the newest filter time by more than this is reported as time going
-  /// backwards (a looping rosbag) instead of "too old" [s]; range [history_length_s, 1e6].
+  /// A stamp older than the newest filter time by more than this is stale [s]; range
+  /// [history_length_s, 1e6]. A stale message is dropped (kRejectedStale, with the reason) and
+  /// counted; time going backwards (a looping rosbag: the caller should reset) is reported only
+  /// for a sustained run of them (stale_reset_count) or for one far older
+  /// (time_backwards_reset_s). One glitched IMU or odometry stamp thus never resets the filter.
   double time_backwards_tolerance_s = 5.0;
+  /// Consecutive stale messages (each message counted once, whatever its parts) after which
+  /// time is reported to have gone backwards; range [1, 1e6]. A message within the tolerance
+  /// ends the run. At 100 Hz IMU and 50 Hz odometry, 10 messages are about 70 ms of a loop.
+  int stale_reset_count = 10;
+  /// A stamp older than the filter time by more than this is time going backwards at once [s],
+  /// range [time_backwards_tolerance_s, 1e6]: no late or glitched sensor message is that old,
+  /// a rosbag that looped is.
+  double time_backwards_reset_s = 10.0;
   /// Largest prediction interval accepted [s], range (0, 3600]. A measurement (or stateAt
   /// query) further ahead of the filter time is refused as a forward time jump: the caller
   /// should reset. Also bounds the work of one prediction.

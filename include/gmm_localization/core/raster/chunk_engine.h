@@ -11,8 +11,12 @@
 //     nearest needed chunk that is neither held nor being rasterized (ChunkPlanner);
 //  2. load the tiles it reads (ChunkPlanner::tilesFor: the rule of chunk_reach.h) that are not
 //     cached (MapStore::loadTile, outside the lock). A tile that fails (CRC, truncated, ...) is
-//     remembered as bad for this map version, reported once through on_tile_error, and treated
-//     as empty: the chunk is still served;
+//     remembered as bad, reported once through on_tile_error, and treated as empty: the chunk
+//     is still served (degraded). A bad tile is tried again every tile_retry_period_s (the
+//     directory may be restored meanwhile): when no needed chunk is pending, a degraded held
+//     chunk whose missing tile is due is planned again; if the tile now loads it is reported
+//     through on_tile_recovered and the chunk is rasterized again and replaces the held one
+//     (same map version); if not, nothing is republished;
 //  3. rasterizeChunk (outside the lock), then hand the chunk to on_chunk, which publishes it and
 //     returns the chunk to hold (e.g. one sharing the published message's memory), unless the
 //     map changed or the chunk left the keep radius meanwhile.
@@ -24,6 +28,7 @@
 // Failure: create() and switchMap() fail with the reason (unreadable manifest, invalid options,
 // a map without tiles) and then change nothing. Nothing else fails: tile errors are reported.
 
+#include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <functional>
@@ -49,6 +54,8 @@ struct ChunkEngineOptions {
   double hysteresis_m = 20.0;          ///< extra distance before anything is evicted [m]
   RasterOptions raster;
   int worker_threads = 1;  ///< background rasterization threads, in [1, 16]
+  /// A tile that failed to load is tried again after this [s], in [0.01, 86400].
+  double tile_retry_period_s = 10.0;
 
   /// Empty when valid, else the offending field, its value and the allowed range.
   std::string validate() const;
@@ -70,6 +77,7 @@ struct ChunkEngineStats {
   double max_raster_ms = 0.0;
   double last_tile_load_ms = 0.0;             ///< loadTile time of the last tile loaded [ms]
   std::map<TileId, std::string> tile_errors;  ///< bad tiles of this map and why
+  size_t chunks_degraded = 0;  ///< held chunks rasterized without some bad tile they read
   bool has_centres = false;
 };
 
@@ -81,8 +89,10 @@ class ChunkEngine {
     std::function<MapChunkConstPtr(const MapChunkConstPtr& chunk, uint64_t map_version)> on_chunk;
     /// The held set changed (a chunk added or evicted, or the map switched). Optional.
     std::function<void()> on_held_changed;
-    /// A tile could not be loaded; reported once per tile and map version. Optional.
+    /// A tile could not be loaded; reported once per tile until it loads again. Optional.
     std::function<void(const TileId& tile, const std::string& reason)> on_tile_error;
+    /// A tile that had failed loads again (its chunks are being rasterized again). Optional.
+    std::function<void(const TileId& tile)> on_tile_recovered;
   };
 
   /// Opens the map and starts the workers (idle until setCentres()). map_version is the version
@@ -119,11 +129,22 @@ class ChunkEngine {
 
  private:
   struct Job;
+  using Clock = std::chrono::steady_clock;
+  struct BadTile {
+    std::string reason;
+    Clock::time_point retry_at;
+  };
   ChunkEngine(const ChunkEngineOptions& options, Callbacks callbacks);
   void installMap(std::shared_ptr<const MapStore> store, uint64_t version);
   void workerLoop();
   /// Plans under the lock; returns false when there is nothing to do.
   bool plan(Job& job, std::vector<ChunkId>& evicted);
+  /// A degraded held chunk with a bad tile due for a retry (under the lock), or nullptr.
+  const ChunkId* dueRefreshLocked(Clock::time_point now) const;
+  /// Fills the job's tiles: cached ones, and those to load (bad ones only when due).
+  void collectTilesLocked(Job& job, Clock::time_point now);
+  /// Earliest retry of a tile a degraded held chunk lacks (under the lock); max() when none.
+  Clock::time_point nextRetryLocked() const;
   void runJob(Job& job);
   bool idleLocked() const;
 
@@ -144,8 +165,9 @@ class ChunkEngine {
   std::map<ChunkId, MapChunkConstPtr> held_;
   std::set<ChunkId> in_progress_;
   std::map<TileId, GmmTileConstPtr> tiles_;
-  std::map<TileId, std::string> bad_tiles_;
-  size_t pending_ = 0;  // needed, not held, at the last plan
+  std::map<TileId, BadTile> bad_tiles_;
+  std::map<ChunkId, std::set<TileId>> degraded_;  // held chunks -> the bad tiles they lack
+  size_t pending_ = 0;                            // needed, not held, at the last plan
   uint64_t rasterized_ = 0;
   double last_raster_ms_ = 0.0, sum_raster_ms_ = 0.0, max_raster_ms_ = 0.0;
   double last_tile_load_ms_ = 0.0;
