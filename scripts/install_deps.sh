@@ -3,7 +3,7 @@
 # Idempotent: does nothing when everything is already installed.
 set -euo pipefail
 PACKAGES=(
-  build-essential cmake git
+  build-essential cmake git ninja-build
   ros-base-dev catkin libnodeletlib-dev libnodelet-dev libnodeletlib-tools pluginlib-dev
   libpcl-ros-dev libpcl-conversions-dev libpcl-dev libtf2-ros-dev libtf2-eigen-dev
   libtf2-geometry-msgs-dev libtf2-sensor-msgs-dev librosbag-dev librostest-dev
@@ -12,6 +12,7 @@ PACKAGES=(
   python3-roslaunch python3-rostest python3-rosbag python3-numpy python3-matplotlib
   libeigen3-dev libyaml-cpp-dev zlib1g-dev libgtest-dev libbenchmark-dev libtbb-dev libembree-dev
   rviz xvfb imagemagick clang-format
+  clang-14 libclang-rt-14-dev
 )
 missing=()
 for p in "${PACKAGES[@]}"; do
