@@ -77,22 +77,8 @@ TEST_F(RegistrationTest, RecoversFiftySeededPoses) {
 }
 
 TEST(RegistrationCovariance, LargerAlongACorridorThanAcrossIt) {
-  MapGeometry g;
-  g.tile_size_cells = 128;
-  const GmmMap map = testing::corridorMap(g);
-  RasterOptions ro;
-  ChunkMap chunks(g, ro);
-  for (int cy = -2; cy <= 1; ++cy) {
-    for (int cx = -3; cx <= 2; ++cx) chunks.insert(rasterizeChunk(map, {cx, cy}, ro).value());
-  }
-  PointList scan;
-  for (double x = -20.0; x <= 20.0; x += 0.1) {
-    for (double z = 0.2; z < 4.0; z += 0.2) {
-      scan.emplace_back(x, 3.0f, z);
-      scan.emplace_back(x, -3.0f, z);
-    }
-    for (double y = -2.8; y <= 2.8; y += 0.4) scan.emplace_back(x, y, 0.0f);
-  }
+  const ChunkMap chunks = testing::corridorChunks();
+  const PointList scan = testing::corridorScan();
   MatchRequest req;
   req.half_x_m = req.half_y_m = 2.0;
   req.half_heading_rad = 0.05;

@@ -5,7 +5,10 @@
 #include <cmath>
 #include <memory>
 
+#include "gmm_localization/core/common/types.h"
 #include "gmm_localization/core/map/gmm_tile.h"
+#include "gmm_localization/core/raster/chunk_map.h"
+#include "gmm_localization/core/raster/rasterizer.h"
 
 namespace gmm_localization {
 namespace testing {
@@ -33,6 +36,32 @@ inline GmmMap corridorMap(const MapGeometry& g) {
     }
   }
   return map;
+}
+
+/// corridorMap on 128-cell tiles, rasterized with the default options over its chunks.
+inline ChunkMap corridorChunks() {
+  MapGeometry g;
+  g.tile_size_cells = 128;
+  const GmmMap map = corridorMap(g);
+  const RasterOptions ro;
+  ChunkMap chunks(g, ro);
+  for (int cy = -2; cy <= 1; ++cy) {
+    for (int cx = -3; cx <= 2; ++cx) chunks.insert(rasterizeChunk(map, {cx, cy}, ro).value());
+  }
+  return chunks;
+}
+
+/// A scan of the corridor from its centre: both walls and the floor over x in [-20, 20] m.
+inline PointList corridorScan() {
+  PointList scan;
+  for (double x = -20.0; x <= 20.0; x += 0.1) {
+    for (double z = 0.2; z < 4.0; z += 0.2) {
+      scan.emplace_back(x, 3.0f, z);
+      scan.emplace_back(x, -3.0f, z);
+    }
+    for (double y = -2.8; y <= 2.8; y += 0.4) scan.emplace_back(x, y, 0.0f);
+  }
+  return scan;
 }
 
 }  // namespace testing
