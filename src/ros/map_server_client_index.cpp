@@ -1,5 +1,6 @@
-// What a map index describes (geometry, raster options) and whether it is usable
-// (validateIndex), for MapServerClient (map_server_client.h).
+// What a map index describes (geometry, raster options: geometryOf, rasterOptionsOf, and their
+// inverse toMsg for the map server) and whether it is usable (validateIndex), for
+// MapServerClient (map_server_client.h).
 #include <cmath>
 #include <sstream>
 
@@ -27,6 +28,19 @@ RasterOptions rasterOptionsOf(const MapIndex& index) {
   o.z_coarsening_period = index.z_coarsening_period;
   o.chunk_shift = index.chunk_shift;
   return o;
+}
+
+void toMsg(const MapGeometry& geometry, const RasterOptions& raster, MapIndex& index) {
+  index.resolution_m = geometry.resolution_m;
+  index.tile_size_cells = geometry.tile_size_cells;
+  index.origin_x_m = geometry.origin_x_m;
+  index.origin_y_m = geometry.origin_y_m;
+  index.z_step_m = raster.z_step_m;
+  index.ll_floor = raster.ll_floor;
+  index.ll_ceiling = raster.ll_ceiling;
+  index.num_layers = raster.num_layers;
+  index.z_coarsening_period = raster.z_coarsening_period;
+  index.chunk_shift = raster.chunk_shift;
 }
 
 std::string validateIndex(const MapIndex& index) {

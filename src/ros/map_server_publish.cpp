@@ -7,6 +7,7 @@
 #include "gmm_localization/ros/chunk_conversion.h"
 #include "gmm_localization/ros/cloud_conversion.h"
 #include "gmm_localization/ros/map_server.h"
+#include "gmm_localization/ros/map_server_client.h"
 #include "gmm_localization/ros/map_server_cloud.h"
 
 namespace gmm_localization {
@@ -71,23 +72,12 @@ void MapServer::publishIndex() {
   std::lock_guard<std::mutex> publish(index_mutex_);
   auto index = boost::make_shared<MapIndex>();
   const auto store = engine_->store();
-  const MapGeometry& g = store->geometry();
-  const RasterOptions& r = options_.engine.raster;
   const MapSummary summary = engine_->mapSummary();
   const std::vector<MapChunkConstPtr> held = engine_->held();
   index->header.frame_id = options_.map_frame;
   index->map_directory = store->directory();
   index->map_version = engine_->mapVersion();
-  index->resolution_m = g.resolution_m;
-  index->tile_size_cells = g.tile_size_cells;
-  index->origin_x_m = g.origin_x_m;
-  index->origin_y_m = g.origin_y_m;
-  index->z_step_m = r.z_step_m;
-  index->ll_floor = r.ll_floor;
-  index->ll_ceiling = r.ll_ceiling;
-  index->num_layers = r.num_layers;
-  index->z_coarsening_period = r.z_coarsening_period;
-  index->chunk_shift = r.chunk_shift;
+  toMsg(store->geometry(), options_.engine.raster, *index);
   for (const MapChunkConstPtr& c : held) {
     index->chunk_x.push_back(c->id().x);
     index->chunk_y.push_back(c->id().y);

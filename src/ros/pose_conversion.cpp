@@ -20,20 +20,25 @@ geometry_msgs::Pose toMsg(const Eigen::Isometry3d& T) {
   return p;
 }
 
-Eigen::Isometry3d fromMsg(const geometry_msgs::Pose& p) {
+namespace {
+
+/// The isometry of translation t (a geometry_msgs Point or Vector3) and rotation q (normalized).
+template <class Translation>
+Eigen::Isometry3d isometryOf(const Translation& t, const geometry_msgs::Quaternion& q) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.translation() = Eigen::Vector3d(p.position.x, p.position.y, p.position.z);
-  Eigen::Quaterniond q(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z);
-  T.linear() = q.normalized().toRotationMatrix();
+  T.translation() = Eigen::Vector3d(t.x, t.y, t.z);
+  T.linear() = Eigen::Quaterniond(q.w, q.x, q.y, q.z).normalized().toRotationMatrix();
   return T;
 }
 
+}  // namespace
+
+Eigen::Isometry3d fromMsg(const geometry_msgs::Pose& p) {
+  return isometryOf(p.position, p.orientation);
+}
+
 Eigen::Isometry3d fromMsg(const geometry_msgs::Transform& t) {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.translation() = Eigen::Vector3d(t.translation.x, t.translation.y, t.translation.z);
-  Eigen::Quaterniond q(t.rotation.w, t.rotation.x, t.rotation.y, t.rotation.z);
-  T.linear() = q.normalized().toRotationMatrix();
-  return T;
+  return isometryOf(t.translation, t.rotation);
 }
 
 void toMsg(const Eigen::Isometry3d& T, geometry_msgs::Transform& msg) {

@@ -34,6 +34,7 @@
 #include "gmm_localization/core/raster/rasterizer.h"
 #include "gmm_localization/ros/chunk_conversion.h"
 #include "gmm_localization/ros/cloud_conversion.h"
+#include "gmm_localization/ros/map_server_client.h"
 #include "gmm_localization/ros/pose_conversion.h"
 
 namespace gmm_localization {
@@ -103,18 +104,7 @@ class Harness {
     index.header.frame_id = "map";
     index.map_directory = "synthetic";
     index.map_version = 7;
-    const MapGeometry& g = chunks_.geometry();
-    const RasterOptions& o = chunks_.options();
-    index.resolution_m = g.resolution_m;
-    index.tile_size_cells = g.tile_size_cells;
-    index.origin_x_m = g.origin_x_m;
-    index.origin_y_m = g.origin_y_m;
-    index.z_step_m = o.z_step_m;
-    index.ll_floor = o.ll_floor;
-    index.ll_ceiling = o.ll_ceiling;
-    index.num_layers = o.num_layers;
-    index.z_coarsening_period = o.z_coarsening_period;
-    index.chunk_shift = o.chunk_shift;
+    toMsg(chunks_.geometry(), chunks_.options(), index);
     for (const auto& kv : chunks_.chunks()) {
       index.chunk_x.push_back(kv.first.x);
       index.chunk_y.push_back(kv.first.y);

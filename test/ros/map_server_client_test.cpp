@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 #include <boost/make_shared.hpp>
 
+#include "../unit/support/small_map.h"
 #include "gmm_localization/core/raster/rasterizer.h"
 #include "gmm_localization/ros/chunk_conversion.h"
 
@@ -16,33 +17,11 @@ namespace gmm_localization {
 namespace node {
 namespace {
 
-RasterOptions options() {
-  RasterOptions o;
-  o.chunk_shift = 4;
-  o.num_layers = 2;
-  return o;
-}
-
-GmmMap smallMap() {
-  MapGeometry g;
-  g.tile_size_cells = 16;
-  GmmMap map(g);
-  for (int tx = 0; tx < 2; ++tx) {
-    auto tile = std::make_shared<GmmTile>(TileId{tx, 0}, 16);
-    for (int y = 0; y < 16; ++y) {
-      for (int x = 0; x < 16; ++x) {
-        GaussianMixture1D m;
-        m.add({1.f, 0.1f * x, 0.05f});
-        tile->at(x, y) = m;
-      }
-    }
-    map.insert(tile);
-  }
-  return map;
-}
+using testing::smallMap;
+using testing::smallMapRasterOptions;
 
 RasterChunk::ConstPtr chunkMsg(ChunkId id, uint64_t version, double stamp_s) {
-  auto chunk = rasterizeChunk(smallMap(), id, options());
+  auto chunk = rasterizeChunk(smallMap(), id, smallMapRasterOptions());
   EXPECT_TRUE(chunk.ok());
   auto msg = boost::make_shared<RasterChunk>();
   toMsg(**chunk, version, "map", ros::Time(stamp_s), *msg);
@@ -53,15 +32,7 @@ MapIndex::ConstPtr indexMsg(uint64_t version, double stamp_s, std::vector<ChunkI
   auto index = boost::make_shared<MapIndex>();
   index->header.stamp = ros::Time(stamp_s);
   index->map_version = version;
-  index->resolution_m = 0.2;
-  index->tile_size_cells = 16;
-  const RasterOptions o = options();
-  index->z_step_m = o.z_step_m;
-  index->ll_floor = o.ll_floor;
-  index->ll_ceiling = o.ll_ceiling;
-  index->num_layers = o.num_layers;
-  index->z_coarsening_period = o.z_coarsening_period;
-  index->chunk_shift = o.chunk_shift;
+  toMsg(testing::smallMapGeometry(), smallMapRasterOptions(), *index);
   for (const ChunkId& id : ids) {
     index->chunk_x.push_back(id.x);
     index->chunk_y.push_back(id.y);

@@ -6,36 +6,15 @@
 
 #include <gtest/gtest.h>
 
+#include "../unit/support/small_map.h"
 #include "gmm_localization/core/raster/rasterizer.h"
 
 namespace gmm_localization {
 namespace node {
 namespace {
 
-RasterOptions options() {
-  RasterOptions o;
-  o.chunk_shift = 4;
-  o.num_layers = 2;
-  return o;
-}
-
-GmmMap smallMap() {
-  MapGeometry g;
-  g.tile_size_cells = 16;
-  GmmMap map(g);
-  for (int tx = 0; tx < 2; ++tx) {
-    auto tile = std::make_shared<GmmTile>(TileId{tx, 0}, 16);
-    for (int y = 0; y < 16; ++y) {
-      for (int x = 0; x < 16; ++x) {
-        GaussianMixture1D m;
-        m.add({1.f, 0.1f * x, 0.05f});
-        tile->at(x, y) = m;
-      }
-    }
-    map.insert(tile);
-  }
-  return map;
-}
+using testing::smallMap;
+using testing::smallMapRasterOptions;
 
 TEST(MapCloud, OnePointPerNonEmptyCellNearTheCentre) {
   GmmMap map = smallMap();
@@ -47,7 +26,7 @@ TEST(MapCloud, OnePointPerNonEmptyCellNearTheCentre) {
   tile->at(3, 2) = two;
   tile->at(4, 2).clear();
   map.insert(tile);
-  const RasterOptions o = options();
+  const RasterOptions o = smallMapRasterOptions();
   std::vector<MapChunkConstPtr> chunks{*rasterizeChunk(map, {0, 0}, o),
                                        *rasterizeChunk(map, {1, 0}, o)};
   CloudData cloud;

@@ -50,6 +50,9 @@ namespace node {
 /// Geometry and raster options described by an index.
 MapGeometry geometryOf(const MapIndex& index);
 RasterOptions rasterOptionsOf(const MapIndex& index);
+/// The inverse, for the publisher of an index: writes geometry and raster into index's fields
+/// (geometryOf and rasterOptionsOf read them back unchanged); its other fields are not touched.
+void toMsg(const MapGeometry& geometry, const RasterOptions& raster, MapIndex& index);
 
 /// Empty when `index` describes a usable map, else which field is wrong and why: the geometry
 /// within the map format's physical bounds (checkMapGeometryBounds: resolution in [0.05, 10] m,

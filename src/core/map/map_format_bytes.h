@@ -2,10 +2,13 @@
 // Private to the map format: explicit little-endian byte writing and bounds-checked reading.
 // Values are assembled byte by byte, so the host's endianness and struct layout never matter.
 
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <string>
 #include <vector>
+
+#include "gmm_localization/core/map/map_format.h"
 
 namespace gmm_localization {
 namespace map_format {
@@ -114,6 +117,23 @@ class ByteReader {
   bool ok_ = true;
   std::string error_;
 };
+
+/// The start of every map file: 4 magic bytes, then the format version (u16). Reads both with
+/// r, which must stand at the start of data[0, size); empty when they are `magic` and
+/// kMapFormatVersion, else why not (`kind` names the file expected: "GMM tile file").
+inline std::string readFileStart(ByteReader& r, const uint8_t* data, size_t size,
+                                 const uint8_t (&magic)[4], const char* kind) {
+  if (size < 4) return "truncated: " + std::to_string(size) + " bytes, no room for the magic";
+  if (!std::equal(data, data + 4, magic)) return std::string("wrong magic (not a ") + kind + ")";
+  r.u32("magic");
+  const uint16_t version = r.u16("format version");
+  if (!r.ok()) return r.error();
+  if (version != kMapFormatVersion) {
+    return "unsupported format version " + std::to_string(version) + " (this build reads " +
+           std::to_string(kMapFormatVersion) + ")";
+  }
+  return {};
+}
 
 }  // namespace map_format
 }  // namespace gmm_localization

@@ -108,17 +108,10 @@ Result<MapManifest> decodeManifest(const uint8_t* data, size_t size, const std::
   auto fail = [&](const std::string& what) {
     return R::failure("manifest '" + source + "': " + what);
   };
-  if (size < 4) return fail("truncated: " + std::to_string(size) + " bytes, no room for the magic");
-  if (!std::equal(data, data + 4, kManifestMagic))
-    return fail("wrong magic (not a GMM map manifest)");
   ByteReader r(data, size);
-  r.u32("magic");
-  const uint16_t version = r.u16("format version");
-  if (!r.ok()) return fail(r.error());
-  if (version != kMapFormatVersion) {
-    return fail("unsupported format version " + std::to_string(version) + " (this build reads " +
-                std::to_string(kMapFormatVersion) + ")");
-  }
+  const std::string start =
+      map_format::readFileStart(r, data, size, kManifestMagic, "GMM map manifest");
+  if (!start.empty()) return fail(start);
   if (size < 12) return fail("truncated: " + std::to_string(size) + " bytes");
   const uint32_t stored_crc = static_cast<uint32_t>(data[size - 4]) | (data[size - 3] << 8) |
                               (data[size - 2] << 16) |
@@ -134,7 +127,7 @@ Result<MapManifest> decodeManifest(const uint8_t* data, size_t size, const std::
   body.u32("magic");
   body.u16("format version");
   MapManifest m;
-  m.format_version = version;
+  m.format_version = kMapFormatVersion;  // readFileStart accepted no other
   const uint16_t flags = body.u16("flags");
   m.geometry.resolution_m = body.f64("resolution");
   m.geometry.tile_size_cells = static_cast<int32_t>(body.u32("tile size"));

@@ -188,16 +188,9 @@ Result<std::shared_ptr<GmmTile>> decodeTile(const uint8_t* data, size_t size,
   auto fail = [&](const std::string& what) {
     return R::failure("tile file '" + source + "': " + what);
   };
-  if (size < 4) return fail("truncated: " + std::to_string(size) + " bytes, no room for the magic");
-  if (!std::equal(data, data + 4, kTileMagic)) return fail("wrong magic (not a GMM tile file)");
   ByteReader r(data, size);
-  r.u32("magic");
-  const uint16_t version = r.u16("format version");
-  if (!r.ok()) return fail(r.error());
-  if (version != kMapFormatVersion) {
-    return fail("unsupported format version " + std::to_string(version) + " (this build reads " +
-                std::to_string(kMapFormatVersion) + ")");
-  }
+  const std::string start = map_format::readFileStart(r, data, size, kTileMagic, "GMM tile file");
+  if (!start.empty()) return fail(start);
   if (size < kTileHeaderBytes + kCrcBytes) {
     return fail("truncated: " + std::to_string(size) + " bytes, a version-1 tile has at least " +
                 std::to_string(kTileHeaderBytes + kCrcBytes));

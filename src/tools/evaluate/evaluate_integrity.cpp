@@ -2,28 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
-#include <iomanip>
 #include <sstream>
 
+#include "evaluate/evaluate_format.h"
 #include "evaluate/evaluate_metrics.h"
 
 namespace gmm_localization {
 namespace eval {
 namespace {
-
-std::string num(double v) {
-  if (!std::isfinite(v)) return "null";
-  std::ostringstream s;
-  s << std::setprecision(4) << v;
-  return s.str();
-}
-
-std::string fixed(double v, int digits) {
-  if (!std::isfinite(v)) return "-";
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(digits) << v;
-  return s.str();
-}
 
 double quantileOr(const std::vector<double>& v, double q) {
   return v.empty() ? NAN : quantile(v, q);

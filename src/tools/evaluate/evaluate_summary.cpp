@@ -5,6 +5,8 @@
 #include <iomanip>
 #include <sstream>
 
+#include "evaluate/evaluate_format.h"
+
 namespace gmm_localization {
 namespace eval {
 namespace {
@@ -16,13 +18,6 @@ std::array<double, 2> targetRms(const std::string& dataset) {
   if (dataset == "downtown") return {0.075, 0.05};
   if (dataset == "snowy") return {0.09, 0.06};
   return {0.0, 0.0};
-}
-
-std::string num(double v, int precision = 4) {
-  if (!std::isfinite(v)) return "null";
-  std::ostringstream s;
-  s << std::setprecision(precision) << v;
-  return s.str();
 }
 
 std::string jsonString(const std::string& v) {
@@ -49,13 +44,6 @@ std::string pct(double share) {
   if (!std::isfinite(share)) return "-";
   std::ostringstream s;
   s << std::fixed << std::setprecision(1) << share * 100.0 << "%";
-  return s.str();
-}
-
-std::string fixed(double v, int digits) {
-  if (!std::isfinite(v)) return "-";
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(digits) << v;
   return s.str();
 }
 

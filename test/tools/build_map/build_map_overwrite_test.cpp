@@ -27,6 +27,7 @@
 
 #include <gtest/gtest.h>
 
+#include "../../unit/support/temp_dir.h"
 #include "gmm_localization/core/map/map_store.h"
 
 #ifndef GMM_BUILD_MAP_BINARY
@@ -43,17 +44,7 @@ namespace fs = std::filesystem;
 using Files = std::map<std::string, std::vector<uint8_t>>;
 using Clock = std::chrono::steady_clock;
 
-struct TempDir {
-  TempDir() {
-    char tmpl[] = "/tmp/gmm_build_map_overwrite_XXXXXX";
-    path = ::mkdtemp(tmpl);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-  std::string path;
-};
+using testing::TempDir;
 
 /// build_map on a 60 m synthetic street in 64-cell (12.8 m) tiles: a few seconds, ~60 tiles.
 std::vector<std::string> buildMapArgs(const std::string& output, int seed,
@@ -222,7 +213,7 @@ class BuildMapOverwrite : public ::testing::Test {
     }
   }
 
-  TempDir work_;
+  TempDir work_{"gmm_build_map_overwrite"};
   std::string dir_, log_;
   Files old_;
 };
@@ -333,7 +324,7 @@ uint64_t usedBytes(const std::string& path) {
 }
 
 TEST(BuildMapOverwriteFullDisk, RunsOutOfSpaceAndKeepsTheOldMap) {
-  TempDir mount_point, outside;
+  TempDir mount_point("gmm_build_map_overwrite"), outside("gmm_build_map_overwrite");
   const std::string mp = mount_point.path;
   if (::mount("tmpfs", mp.c_str(), "tmpfs", 0, "size=64m") != 0) {
     GTEST_SKIP() << "cannot mount a tmpfs on " << mp << " (" << std::strerror(errno)
@@ -389,7 +380,7 @@ TEST(BuildMapOverwriteFullDisk, RunsOutOfSpaceAndKeepsTheOldMap) {
 TEST(BuildMapCli, ResolutionOutsideTheMapFormatFailsAtOnceWithTheRange) {
   // 5e-4 m cells passed the builder's own check (> 0) and ended in a manifest the map format
   // refuses (after a build over a grid 160 000 times the size of the 0.2 m one).
-  TempDir work;
+  TempDir work("gmm_build_map_overwrite");
   const std::string dir = work.path + "/map";
   const auto t0 = Clock::now();
   const RunOutcome r = run(buildMapArgs(dir, 1, {"--resolution", "5e-4"}), work.path + "/log");

@@ -5,14 +5,13 @@
 #include <rosbag/bag.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <tf2_msgs/TFMessage.h>
-#include <unistd.h>
 
 #include <cstring>
-#include <filesystem>
 #include <sstream>
 
 #include <gtest/gtest.h>
 
+#include "../../unit/support/temp_dir.h"
 #include "build_map/build_map_options.h"
 #include "build_map/build_map_readers.h"
 #include "build_map/build_map_synthetic.h"
@@ -22,16 +21,7 @@ namespace gmm_localization {
 namespace tools {
 namespace {
 
-namespace fs = std::filesystem;
-
-struct TempDir {
-  TempDir() {
-    char tmpl[] = "/tmp/gmm_readers_XXXXXX";
-    path = ::mkdtemp(tmpl);
-  }
-  ~TempDir() { fs::remove_all(path); }
-  std::string path;
-};
+using testing::TempDir;
 
 sensor_msgs::PointCloud2 cloudMsg(double t, const std::string& frame, float x) {
   sensor_msgs::PointCloud2 c;
@@ -89,7 +79,7 @@ std::string writeBag(const std::string& dir, bool with_tf) {
 }
 
 TEST(RosbagSource, InterpolatesPosesAppliesTfStaticAndSkipsWhatItCannotPlace) {
-  TempDir dir;
+  TempDir dir("gmm_readers");
   RosbagSourceOptions o;
   o.path = writeBag(dir.path, true);
   o.cloud_topic = "/points";
@@ -117,7 +107,7 @@ TEST(RosbagSource, InterpolatesPosesAppliesTfStaticAndSkipsWhatItCannotPlace) {
 }
 
 TEST(RosbagSource, FailsClearlyWithoutExtrinsicAndUsesAGivenOne) {
-  TempDir dir;
+  TempDir dir("gmm_readers");
   RosbagSourceOptions o;
   o.path = writeBag(dir.path, false);
   o.cloud_topic = "/points";
@@ -145,7 +135,7 @@ TEST(RosbagSource, FailsClearlyWithoutExtrinsicAndUsesAGivenOne) {
 }
 
 TEST(RosbagSource, DeskewsWithPerPointTime) {
-  TempDir dir;
+  TempDir dir("gmm_readers");
   const std::string path = dir.path + "/timed.bag";
   {
     rosbag::Bag bag(path, rosbag::bagmode::Write);

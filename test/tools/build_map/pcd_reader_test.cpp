@@ -6,7 +6,6 @@
 #include <pcl/io/lzf.h>
 #include <pcl/io/pcd_io.h>
 #include <pcl/point_types.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <cstring>
@@ -18,6 +17,7 @@
 
 #include <gtest/gtest.h>
 
+#include "../../unit/support/temp_dir.h"
 #include "build_map/build_map_options.h"
 #include "build_map/build_map_readers.h"
 #include "build_map/lzf.h"
@@ -29,14 +29,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct TempDir {
-  TempDir() {
-    char tmpl[] = "/tmp/gmm_pcd_XXXXXX";
-    path = ::mkdtemp(tmpl);
-  }
-  ~TempDir() { fs::remove_all(path); }
-  std::string path;
-};
+using testing::TempDir;
 
 std::string readBytes(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
@@ -202,7 +195,7 @@ const PcdData kAllKinds[] = {PcdData::kAscii, PcdData::kBinary, PcdData::kBinary
 // ---- well-formed files ----
 
 TEST(PcdSource, ReadsPclFilesInAllThreeFormatsInBatchesWithOffset) {
-  TempDir dir;
+  TempDir dir("gmm_pcd");
   const auto cloud = lineCloud(2500);
   const std::string a = dir.path + "/a.pcd", b = dir.path + "/b.pcd", c = dir.path + "/c.pcd";
   ASSERT_EQ(pcl::io::savePCDFileASCII(a, cloud), 0);
@@ -236,7 +229,7 @@ TEST(PcdSource, ReadsPclFilesInAllThreeFormatsInBatchesWithOffset) {
 }
 
 TEST(PcdSource, DoubleUtmCoordinatesLandWithinAMillimetreAfterTheOffset) {
-  TempDir dir;
+  TempDir dir("gmm_pcd");
   std::vector<std::vector<double>> rows;
   for (int i = 0; i < 300; ++i)
     rows.push_back({500000.1234 + 0.01 * i, 4500000.5678 - 0.02 * i, 200.789 + 0.001 * i, 3.0});
@@ -261,7 +254,7 @@ TEST(PcdSource, DoubleUtmCoordinatesLandWithinAMillimetreAfterTheOffset) {
 }
 
 TEST(PcdSource, Float32UtmCoordinatesWarnOnce) {
-  TempDir dir;
+  TempDir dir("gmm_pcd");
   pcl::PointCloud<pcl::PointXYZ> cloud;
   for (int i = 0; i < 100; ++i) cloud.push_back(pcl::PointXYZ(500000.f + i, 4500000.f, 10.f));
   const std::string path = dir.path + "/utm_f4.pcd";
@@ -276,7 +269,7 @@ TEST(PcdSource, Float32UtmCoordinatesWarnOnce) {
 }
 
 TEST(PcdSource, DecodesEveryNumericTypeAndMultiElementFields) {
-  TempDir dir;
+  TempDir dir("gmm_pcd");
   const std::vector<Field> fields = {{"normal", 'F', 4, 3}, {"ring", 'U', 2},        {"x", 'I', 4},
                                      {"pad", 'U', 1, 5},    {"y", 'U', 2},           {"z", 'I', 1},
                                      {"t", 'F', 8},         {"reflectivity", 'U', 1}};
@@ -303,7 +296,7 @@ TEST(PcdSource, DecodesEveryNumericTypeAndMultiElementFields) {
 }
 
 TEST(PcdSource, SeveralFilesAndADirectoryOfTiles) {
-  TempDir dir;
+  TempDir dir("gmm_pcd");
   const std::string tiles = dir.path + "/tiles";
   fs::create_directory(tiles);
   auto tile = [](double x0, int n) {
@@ -359,7 +352,7 @@ TEST(PcdSource, SeveralFilesAndADirectoryOfTiles) {
 }
 
 TEST(PcdSource, TransformFirstThenOffset) {
-  TempDir dir;
+  TempDir dir("gmm_pcd");
   const std::string path = dir.path + "/fastlio.pcd";
   writeBytes(path,
              pcdBytes(kXyzF8, {{1.0, 0.0, 0.0, 1.0}, {0.0, 1.0, 0.0, 1.0}}, PcdData::kBinary));
@@ -390,7 +383,7 @@ TEST(PcdSource, TransformFirstThenOffset) {
 // ---- junk points ----
 
 TEST(PcdSource, DropsNonFiniteAndFarOutPointsWithACountedWarning) {
-  TempDir dir;
+  TempDir dir("gmm_pcd");
   std::vector<std::vector<double>> rows;
   for (int i = 0; i < 1000; ++i) rows.push_back({0.1 * (i % 40), 0.1 * (i / 40), 0.0, 1.0});
   const double nan = std::numeric_limits<double>::quiet_NaN();
@@ -434,7 +427,7 @@ TEST(PcdSource, DropsNonFiniteAndFarOutPointsWithACountedWarning) {
 // ---- malformed files ----
 
 TEST(PcdReader, TruncatedFilesFailWithAReasonNeverACrash) {
-  TempDir dir;
+  TempDir dir("gmm_pcd");
   const auto cloud = lineCloud(200);
   const std::string valid = dir.path + "/valid.pcd", cut = dir.path + "/cut.pcd";
   ASSERT_EQ(pcl::io::savePCDFileBinary(valid, cloud), 0);
@@ -515,7 +508,7 @@ TEST(PcdReader, GarbledHeadersAreRejectedWithTheLineAndTheProblem) {
         << "error: " << h.error() << "\nexpected: " << expected;
   }
   // A file with a garbled header names the file (PCL threw an uncaught exception on it).
-  TempDir dir;
+  TempDir dir("gmm_pcd");
   const std::string path = dir.path + "/garbled.pcd";
   writeBytes(path, replaced("SIZE 4 4 4", "SIZE 4 4 4 4 4") + "1 2 3\n4 5 6\n");
   auto r = PcdFileReader::open(path);
@@ -531,7 +524,7 @@ TEST(PcdReader, GarbledHeadersAreRejectedWithTheLineAndTheProblem) {
 }
 
 TEST(PcdReader, DataShorterThanTheHeaderSays) {
-  TempDir dir;
+  TempDir dir("gmm_pcd");
   std::vector<std::vector<double>> rows(50, std::vector<double>{1.0, 2.0, 3.0, 4.0});
   std::string bytes = pcdBytes(kXyzF8, rows, PcdData::kBinary);
   const size_t at = bytes.find("WIDTH 50"), pt = bytes.find("POINTS 50");
@@ -587,7 +580,7 @@ TEST(PcdReader, DataShorterThanTheHeaderSays) {
 }
 
 TEST(PcdReader, BinaryCompressedWithLyingSizes) {
-  TempDir dir;
+  TempDir dir("gmm_pcd");
   const auto cloud = lineCloud(1000);
   const std::string valid = dir.path + "/valid.pcd", bad = dir.path + "/bad.pcd";
   ASSERT_EQ(pcl::io::savePCDFileBinaryCompressed(valid, cloud), 0);

@@ -1,4 +1,5 @@
 #include "gmm_localization/core/map/map_format.h"
+#include "support/temp_dir.h"
 
 #include <dirent.h>
 #include <signal.h>
@@ -19,19 +20,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct TempDir {
-  TempDir() {
-    char tmpl[] = "/tmp/gmm_map_format_XXXXXX";
-    path = ::mkdtemp(tmpl);
-  }
-  ~TempDir() { fs::remove_all(path); }
-  std::vector<std::string> entries() const {
-    std::vector<std::string> names;
-    for (const auto& e : fs::directory_iterator(path)) names.push_back(e.path().filename());
-    return names;
-  }
-  std::string path;
-};
+using testing::TempDir;
 
 GmmTile randomTile(TileId id, int size, uint32_t seed) {
   GmmTile t(id, size);
@@ -329,7 +318,7 @@ TEST(MapFormat, ManifestRejectsUnsafeNamesAndBadCounts) {
 }
 
 TEST(MapFormat, FilesOnDisk) {
-  TempDir dir;
+  TempDir dir("gmm_map_format");
   const GmmTile t = randomTile({1, 1}, 16, 6);
   auto enc = encodeTile(t);
   ASSERT_TRUE(enc.ok());
@@ -346,7 +335,7 @@ TEST(MapFormat, FilesOnDisk) {
   EXPECT_EQ(dir.entries().size(), 2u);  // no temporary files left behind
 
   // Missing manifest and missing tile: the error names the file and says "missing".
-  TempDir empty;
+  TempDir empty("gmm_map_format");
   auto missing = readManifest(empty.path);
   ASSERT_FALSE(missing.ok());
   EXPECT_NE(missing.error().find(empty.path + "/manifest.gmm"), std::string::npos);
@@ -373,7 +362,7 @@ TEST(MapFormat, FilesOnDisk) {
 }
 
 TEST(MapFormat, FailedAtomicWriteLeavesNoPartialFile) {
-  TempDir dir;
+  TempDir dir("gmm_map_format");
   const std::string path = dir.path + "/data.bin";
   const std::vector<uint8_t> old_bytes(100, 7);
   ASSERT_TRUE(writeFileAtomic(path, old_bytes).ok());

@@ -1,11 +1,11 @@
 #include "gmm_localization/core/map/map_store.h"
 
-#include <unistd.h>
-
 #include <filesystem>
 #include <fstream>
 
 #include <gtest/gtest.h>
+
+#include "support/temp_dir.h"
 
 namespace gmm_localization {
 namespace {
@@ -15,8 +15,6 @@ namespace fs = std::filesystem;
 /// A map of 3 x 2 tiles (ids x in {-1, 0, 1}, y in {0, 1}) of 10 cells at 1 m, written by hand.
 struct SmallMap {
   SmallMap() {
-    char tmpl[] = "/tmp/gmm_map_store_XXXXXX";
-    dir = ::mkdtemp(tmpl);
     MapManifest m;
     m.geometry.resolution_m = 1.0;
     m.geometry.tile_size_cells = 10;
@@ -37,8 +35,8 @@ struct SmallMap {
     }
     EXPECT_TRUE(writeManifest(dir, m).ok());
   }
-  ~SmallMap() { fs::remove_all(dir); }
-  std::string dir;
+  testing::TempDir tmp{"gmm_map_store"};
+  std::string dir = tmp.path;
 };
 
 TEST(MapStore, OpensListsAndLoads) {
