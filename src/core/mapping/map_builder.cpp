@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <exception>
 #include <filesystem>
 #include <sstream>
 
@@ -49,6 +50,17 @@ void removeStaleSpillDirectories(const std::string& parent) {
     if (pid > 0 && ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) {
       fs::remove_all(entry.path(), ec);
     }
+  }
+}
+
+/// What an exception in flight says, for a failure reason. Call from a catch block only.
+std::string currentExceptionText() {
+  try {
+    throw;
+  } catch (const std::exception& e) {
+    return e.what();
+  } catch (...) {
+    return "an exception of unknown type";
   }
 }
 
@@ -130,16 +142,48 @@ void MapBuilder::Impl::abandon() {
 }
 
 std::string MapBuilder::Impl::explain(const std::string& error) const {
-  if (error.find(std::strerror(ENOSPC)) == std::string::npos) return error;
-  return "no space left on device: " + error +
-         " (a build needs room for its spill files and for the new map beside the old one; '" +
-         options.output_directory + "' is left as it was)";
+  if (error.find(std::strerror(ENOSPC)) != std::string::npos) {
+    return "no space left on device: " + error +
+           " (a build needs room for its spill files and for the new map beside the old one; '" +
+           options.output_directory + "' is left as it was)";
+  }
+  std::error_code ec;
+  if (!staging_directory.empty() && !fs::exists(staging_directory, ec) && !ec) {
+    return "the build's staging directory '" + staging_directory +
+           "' disappeared during the build (removed by another program?): " + error + " ('" +
+           options.output_directory + "' is left as it was)";
+  }
+  return error;
+}
+
+std::string MapBuilder::Impl::failWith(const std::string& error) {
+  failure = explain(error);  // before abandon(): it looks at the staging directory
+  abandon();
+  return failure;
 }
 
 const MapBuildStats& MapBuilder::stats() const { return impl_->stats; }
 const MapBuilderOptions& MapBuilder::options() const { return impl_->options; }
 
 Result<std::unique_ptr<MapBuilder>> MapBuilder::create(const MapBuilderOptions& options) {
+  try {
+    return Impl::create(options);
+  } catch (...) {  // what create() had made went with its Impl (~Impl abandons)
+    return Result<std::unique_ptr<MapBuilder>>::failure("cannot create the map builder: " +
+                                                        currentExceptionText());
+  }
+}
+
+Status MapBuilder::addBatch(const PointBatch& batch) {
+  try {
+    return impl_->addBatch(batch);
+  } catch (...) {  // the spill buffers may be half updated: the builder is unusable
+    return Status::failure(
+        impl_->failWith("map builder: adding a batch failed: " + currentExceptionText()));
+  }
+}
+
+Result<std::unique_ptr<MapBuilder>> MapBuilder::Impl::create(const MapBuilderOptions& options) {
   using R = Result<std::unique_ptr<MapBuilder>>;
   const std::string invalid = options.validate();
   if (!invalid.empty()) return R::failure("invalid map builder options: " + invalid);
@@ -220,8 +264,8 @@ Status MapBuilder::Impl::binPoint(double x, double y, double z) {
   return s;
 }
 
-Status MapBuilder::addBatch(const PointBatch& batch) {
-  Impl& m = *impl_;
+Status MapBuilder::Impl::addBatch(const PointBatch& batch) {
+  Impl& m = *this;
   if (!m.failure.empty()) return Status::failure("map builder unusable: " + m.failure);
   if (m.finished) return Status::failure("map builder: addBatch after finish");
   const MapBuilderOptions& o = m.options;
@@ -260,9 +304,8 @@ Status MapBuilder::addBatch(const PointBatch& batch) {
     ++st.kept_points;
     Status bs = m.binPoint(x, y, z);
     if (!bs) {
-      m.failure = m.explain(bs.error());
-      m.abandon();  // frees the disk at once; the output directory is as it was
-      return Status::failure(m.failure);
+      // Frees the disk at once; the output directory is as it was.
+      return Status::failure(m.failWith(bs.error()));
     }
   }
   return Status::success();
@@ -270,16 +313,22 @@ Status MapBuilder::addBatch(const PointBatch& batch) {
 
 Status addAllBatches(PointBatchSource& source, MapBuilder& builder,
                      const std::function<bool(size_t, size_t)>& on_batch) {
-  PointBatch batch;
-  const size_t total = source.sizeHint();
-  for (size_t done = 0;;) {
-    auto more = source.next(batch);
-    if (!more) return Status::failure(more.error());
-    if (!*more) return Status::success();
-    Status s = builder.addBatch(batch);
-    if (!s) return s;
-    ++done;
-    if (on_batch && !on_batch(done, total)) return Status::success();
+  // builder.addBatch() throws nothing; an exception from the source or from on_batch is a
+  // failure (the builder stays usable).
+  try {
+    PointBatch batch;
+    const size_t total = source.sizeHint();
+    for (size_t done = 0;;) {
+      auto more = source.next(batch);
+      if (!more) return Status::failure(more.error());
+      if (!*more) return Status::success();
+      Status s = builder.addBatch(batch);
+      if (!s) return s;
+      ++done;
+      if (on_batch && !on_batch(done, total)) return Status::success();
+    }
+  } catch (...) {
+    return Status::failure("adding the point source's batches failed: " + currentExceptionText());
   }
 }
 

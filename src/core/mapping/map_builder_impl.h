@@ -1,6 +1,7 @@
 #pragma once
 // Private to the map builder: the state shared by pass 1 (map_builder.cpp) and pass 2
-// (map_builder_finish.cpp).
+// (map_builder_finish.cpp). The public methods of MapBuilder call the ones here and turn any
+// exception into a failure (nothing is thrown across the builder's API).
 
 #include <memory>
 #include <set>
@@ -15,6 +16,8 @@
 namespace gmm_localization {
 
 struct MapBuilder::Impl {
+  ~Impl() { abandon(); }  // also on create()'s failures
+
   MapBuilderOptions options;
   MapBuildStats stats;
   map_builder::DirectoryLock lock;  // on options.output_directory, until finish() or destruction
@@ -30,13 +33,20 @@ struct MapBuilder::Impl {
   TileId last_tile{INT32_MIN, INT32_MIN};
   std::vector<map_builder::SpillRecord>* last_buffer = nullptr;
 
+  static Result<std::unique_ptr<MapBuilder>> create(const MapBuilderOptions& options);
+  Status addBatch(const PointBatch& batch);
+  Result<MapBuildStats> finish(const BuildProgressCallback& progress);
+
   Status binPoint(double x, double y, double z);
   void removeSpillDirectory();
   /// Removes the spill and staging directories and releases the lock (the output directory is
   /// then as it was before create(), apart from recovered leftovers).
   void abandon();
-  /// `error`, with an explanation prepended when it is a full disk.
+  /// `error`, with an explanation prepended when it is a full disk or when the staging
+  /// directory has disappeared (removed by someone else during the build).
   std::string explain(const std::string& error) const;
+  /// Marks the builder failed with explain(error), then abandon()s; returns the reason.
+  std::string failWith(const std::string& error);
 };
 
 }  // namespace gmm_localization

@@ -8,30 +8,20 @@
 #include <functional>
 #include <map>
 #include <random>
+#include <stdexcept>
+#include <system_error>
 
 #include <gtest/gtest.h>
 
 #include "gmm_localization/core/map/map_store.h"
+#include "support/temp_dir.h"
 
 namespace gmm_localization {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct TempDir {
-  TempDir() {
-    char tmpl[] = "/tmp/gmm_map_builder_XXXXXX";
-    path = ::mkdtemp(tmpl);
-  }
-  ~TempDir() { fs::remove_all(path); }
-  std::vector<std::string> entries() const {
-    std::vector<std::string> names;
-    for (const auto& e : fs::directory_iterator(path)) names.push_back(e.path().filename());
-    std::sort(names.begin(), names.end());
-    return names;
-  }
-  std::string path;
-};
+using testing::TempDir;
 
 /// An analytic world: surfaces sampled on a regular lattice with Gaussian height noise, fed to
 /// the builder in batches of `batch_size` points (no sensor origin).
@@ -89,6 +79,18 @@ std::vector<std::string> stagingDirectories(const std::string& dir) {
   return found;
 }
 
+/// Removes `path` with all it holds while a build's worker may be creating files in it: a file
+/// created between remove_all's listing and its rmdir fails that round (ENOTEMPTY), so it is
+/// retried until the directory is gone. Afterwards nothing can be created in it any more, which
+/// makes the build's outcome deterministic: it must fail.
+void removeWhileInUse(const std::string& path) {
+  std::error_code ec;
+  for (int round = 0; fs::exists(path, ec) || ec; ++round) {
+    ASSERT_LT(round, 10000) << "cannot remove " << path << ": " << ec.message();
+    fs::remove_all(path, ec);
+  }
+}
+
 /// The map in `dir` opens, every tile loads, and it is exactly the files `expected` holds.
 void expectIntactMap(const std::string& dir,
                      const std::map<std::string, std::vector<uint8_t>>& expected) {
@@ -124,7 +126,7 @@ GaussianMixture1D cellAt(const GmmMap& map, double x, double y) {
 }
 
 TEST(MapBuilder, FlatGroundIsOneTightComponent) {
-  TempDir dir;
+  TempDir dir("gmm_map_builder");
   World w;
   w.plane(0.0, 10.0, 0.0, 10.0, 0.25);
   auto store = build(w, options(dir.path));
@@ -145,7 +147,7 @@ TEST(MapBuilder, FlatGroundIsOneTightComponent) {
 }
 
 TEST(MapBuilder, WallIsOneWideComponentSpanningItsHeight) {
-  TempDir dir;
+  TempDir dir("gmm_map_builder");
   World w;
   w.wallX(5.1, 0.0, 10.0, 0.0, 6.0);
   auto store = build(w, options(dir.path));
@@ -164,7 +166,7 @@ TEST(MapBuilder, WallIsOneWideComponentSpanningItsHeight) {
 
 TEST(MapBuilder, GroundBesideAWallGetsTightGroundAndWideWall) {
   // The paper's facade cells: ground plus the blurred-in wall.
-  TempDir dir;
+  TempDir dir("gmm_map_builder");
   World w;
   w.plane(0.0, 5.0, 0.0, 10.0, 0.0);
   w.wallX(5.1, 0.0, 10.0, 0.0, 6.0);
@@ -183,7 +185,7 @@ TEST(MapBuilder, GroundBesideAWallGetsTightGroundAndWideWall) {
 }
 
 TEST(MapBuilder, OverhangOverGroundIsTwoComponentsAtTheRightHeights) {
-  TempDir dir;
+  TempDir dir("gmm_map_builder");
   World w;
   w.plane(0.0, 10.0, 0.0, 10.0, 0.0);
   w.plane(2.0, 8.0, 2.0, 8.0, 3.0);  // an awning 3 m up
@@ -206,7 +208,7 @@ TEST(MapBuilder, OverhangOverGroundIsTwoComponentsAtTheRightHeights) {
 }
 
 TEST(MapBuilder, EmptyAreaHasNoComponentsAndNoTiles) {
-  TempDir dir;
+  TempDir dir("gmm_map_builder");
   World w;
   w.plane(0.0, 4.0, 0.0, 4.0, 0.0);
   w.plane(30.0, 34.0, 0.0, 4.0, 0.0);  // 64-cell tiles are 12.8 m: tiles 0 and 2 only
@@ -241,7 +243,7 @@ GmmMap buildMixed(const std::string& dir, int tile_size, double origin_m, size_t
 }
 
 TEST(MapBuilder, StreamingOverTileBordersMatchesSingleTileReference) {
-  TempDir a, b;
+  TempDir a("gmm_map_builder"), b("gmm_map_builder");
   // 16-cell tiles (3.2 m) from origin 0: the world (-3..9 m) straddles 4 x 4 tiles, with
   // negative indices, and the blur halo crosses every border. 256-cell tiles from origin
   // -12.8 m (a whole number of cells away, so cells coincide): one tile holds it all.
@@ -271,7 +273,7 @@ TEST(MapBuilder, StreamingOverTileBordersMatchesSingleTileReference) {
 }
 
 TEST(MapBuilder, OutputIsDeterministicAcrossThreadsAndBuffers) {
-  TempDir a, b;
+  TempDir a("gmm_map_builder"), b("gmm_map_builder");
   buildMixed(a.path, 32, 0.0, size_t{1} << 20, 1);
   buildMixed(b.path, 32, 0.0, size_t{64} << 20, 2);
   auto ma = readManifest(a.path), mb = readManifest(b.path);
@@ -284,7 +286,7 @@ TEST(MapBuilder, OutputIsDeterministicAcrossThreadsAndBuffers) {
 }
 
 TEST(MapBuilder, FiltersAreAppliedAndCounted) {
-  TempDir dir;
+  TempDir dir("gmm_map_builder");
   MapBuilderOptions o = options(dir.path);
   o.min_range_m = 2.0;
   o.max_range_m = 10.0;
@@ -317,7 +319,7 @@ TEST(MapBuilder, FiltersAreAppliedAndCounted) {
 }
 
 TEST(MapBuilder, VoxelFilterKeepsOnePointPerVoxelPerBatch) {
-  TempDir dir;
+  TempDir dir("gmm_map_builder");
   MapBuilderOptions o = options(dir.path);
   o.voxel_m = 0.1;
   auto b = MapBuilder::create(o);
@@ -332,7 +334,7 @@ TEST(MapBuilder, VoxelFilterKeepsOnePointPerVoxelPerBatch) {
 }
 
 TEST(MapBuilder, TemporaryFilesAreRemovedOnSuccessFailureAndCancel) {
-  TempDir dir;
+  TempDir dir("gmm_map_builder");
   World w;
   w.plane(0.0, 20.0, 0.0, 20.0, 0.0);
   {  // Success: only the manifest and tile files remain.
@@ -382,7 +384,7 @@ TEST(MapBuilder, TemporaryFilesAreRemovedOnSuccessFailureAndCancel) {
 }
 
 TEST(MapBuilder, RemovesSpillDirectoriesOfDeadProcesses) {
-  TempDir dir;
+  TempDir dir("gmm_map_builder");
   // pid 2^22 + 1 is above Linux's pid_max limit: no such process can exist.
   const std::string stale = dir.path + "/.gmm_build_spill.4194305.0";
   const std::string live = dir.path + "/.gmm_build_spill." + std::to_string(getpid()) + ".999";
@@ -395,7 +397,7 @@ TEST(MapBuilder, RemovesSpillDirectoriesOfDeadProcesses) {
 }
 
 TEST(MapBuilder, RefusesToOverwriteUnlessAsked) {
-  TempDir dir;
+  TempDir dir("gmm_map_builder");
   World big, small;
   big.plane(0.0, 20.0, 0.0, 20.0, 0.0);
   small.plane(0.0, 2.0, 0.0, 2.0, 1.0);
@@ -414,7 +416,7 @@ TEST(MapBuilder, RefusesToOverwriteUnlessAsked) {
 }
 
 TEST(MapBuilder, OverwriteReplacesTheMapAndAlternatesTileFileNames) {
-  TempDir dir;
+  TempDir dir("gmm_map_builder");
   World big, small;
   big.plane(0.0, 20.0, 0.0, 20.0, 0.0);
   small.plane(0.0, 2.0, 0.0, 2.0, 1.0);
@@ -436,7 +438,7 @@ TEST(MapBuilder, OverwriteReplacesTheMapAndAlternatesTileFileNames) {
 }
 
 TEST(MapBuilder, FailedOverwriteLeavesTheOldMapByteIdentical) {
-  TempDir dir;
+  TempDir dir("gmm_map_builder");
   World old_world, new_world;
   old_world.plane(0.0, 12.0, 0.0, 12.0, 0.5);
   new_world.plane(0.0, 20.0, 0.0, 20.0, 2.0);  // 4 x 4 tiles of 6.4 m
@@ -467,14 +469,19 @@ TEST(MapBuilder, FailedOverwriteLeavesTheOldMapByteIdentical) {
     ASSERT_TRUE(b.ok()) << b.error();
     ASSERT_TRUE(new_world.feed(**b).ok());
     expectIntactMap(dir.path, old_files);  // during the build too
+    // The worker is on the next tile meanwhile, possibly creating a file in the directory:
+    // removeWhileInUse() makes sure it is gone when the callback returns (a plain remove_all
+    // may fail then, and throw).
     auto st = (*b)->finish([&](const BuildProgress& p) {
-      if (p.tiles_done == 1) fs::remove_all(stagingDirectories(dir.path).at(0));
+      if (p.tiles_done == 1) removeWhileInUse(stagingDirectories(dir.path).at(0));
       return true;
     });
-    ASSERT_FALSE(st.ok());  // the next tile's spill file or tile file is gone
+    ASSERT_FALSE(st.ok());  // the next tile's spill file or tile file (or the journal) is gone
     EXPECT_TRUE(st.error().find("spill file") != std::string::npos ||
                 st.error().find("cannot write") != std::string::npos)
         << st.error();
+    EXPECT_NE(st.error().find("staging directory"), std::string::npos) << st.error();
+    EXPECT_TRUE(stagingDirectories(dir.path).empty());
     expectIntactMap(dir.path, old_files);
   }
   {  // Pass 2: cancelled after two tiles.
@@ -517,6 +524,123 @@ TEST(MapBuilder, FailedOverwriteLeavesTheOldMapByteIdentical) {
   EXPECT_EQ(dir.entries().size(), 17u);
 }
 
+/// For the tests of a pass 2 that goes wrong at each of its tiles in turn: a directory with a
+/// small map (2 x 2 tiles), and a world of 4 x 4 tiles of 16 cells to overwrite it with.
+struct FailingOverwrite {
+  FailingOverwrite() {
+    World old_world;
+    old_world.plane(0.0, 6.4, 0.0, 6.4, 0.5, 0.1);
+    world.plane(0.0, 12.8, 0.0, 12.8, 2.0, 0.1);
+    EXPECT_TRUE(build(old_world, options(dir.path, 16)).ok());
+    old_files = snapshot(dir.path);
+    EXPECT_EQ(old_files.size(), 5u);
+  }
+  /// Overwrites the map with `world` on `threads` workers, with `progress` as the callback.
+  Result<MapBuildStats> overwrite(int threads, const BuildProgressCallback& progress) const {
+    MapBuilderOptions o = options(dir.path, 16);
+    o.overwrite = true;
+    o.threads = threads;
+    auto b = MapBuilder::create(o);
+    if (!b) return Result<MapBuildStats>::failure("create: " + b.error());
+    Status s = world.feed(**b);
+    if (!s) return Result<MapBuildStats>::failure("feed: " + s.error());
+    return (*b)->finish(progress);
+  }
+  /// What a user is guaranteed after a failed build: the old map, byte-identical, and no
+  /// staging directory (nor anything else) left behind.
+  void expectOldMapOnly() const {
+    expectIntactMap(dir.path, old_files);
+    EXPECT_EQ(dir.entries().size(), old_files.size()) << "a staging directory is left";
+  }
+
+  TempDir dir{"gmm_map_builder"};
+  World world;
+  std::map<std::string, std::vector<uint8_t>> old_files;
+  static constexpr uint64_t kTiles = 16;
+};
+
+TEST(MapBuilder, StagingDirectoryVanishingAtAnyTileFailsTheBuildCleanly) {
+  // The staging directory is removed after tile k, for every k (the last: every tile is written
+  // and the swap finds no staging directory), while the workers go on. Regression: a progress
+  // callback doing this used to make finish() throw past its running workers (std::terminate).
+  FailingOverwrite f;
+  for (int threads : {1, 4}) {
+    for (uint64_t k = 1; k <= FailingOverwrite::kTiles; ++k) {
+      SCOPED_TRACE("threads " + std::to_string(threads) + ", removed after tile " +
+                   std::to_string(k));
+      uint64_t calls = 0;
+      auto st = f.overwrite(threads, [&](const BuildProgress& p) {
+        ++calls;
+        EXPECT_EQ(p.tiles_total, FailingOverwrite::kTiles);
+        if (p.tiles_done == k) removeWhileInUse(stagingDirectories(f.dir.path).at(0));
+        return true;
+      });
+      ASSERT_FALSE(st.ok());
+      EXPECT_NE(st.error().find("staging directory"), std::string::npos) << st.error();
+      EXPECT_NE(st.error().find("disappeared during the build"), std::string::npos) << st.error();
+      EXPECT_TRUE(st.error().find("spill file") != std::string::npos ||
+                  st.error().find("cannot write") != std::string::npos)
+          << st.error();
+      EXPECT_GE(calls, k);
+      f.expectOldMapOnly();
+    }
+  }
+  // The same with a plain, throwing remove_all (the original test's callback): it races with
+  // the worker writing into the directory, so either the directory goes (the build fails for
+  // it) or remove_all throws (the build fails for that). Either way: a failure with a reason,
+  // the workers joined, the old map byte-identical.
+  for (uint64_t k = 1; k <= FailingOverwrite::kTiles; ++k) {
+    SCOPED_TRACE("plain remove_all, removed after tile " + std::to_string(k));
+    auto st = f.overwrite(1, [&](const BuildProgress& p) {
+      if (p.tiles_done == k) fs::remove_all(stagingDirectories(f.dir.path).at(0));
+      return true;
+    });
+    ASSERT_FALSE(st.ok());
+    EXPECT_TRUE(st.error().find("disappeared during the build") != std::string::npos ||
+                st.error().find("progress callback threw") != std::string::npos)
+        << st.error();
+    f.expectOldMapOnly();
+  }
+  ASSERT_TRUE(f.overwrite(4, {}).ok());  // the directory is usable: a build then succeeds
+  auto store = MapStore::open(f.dir.path);
+  ASSERT_TRUE(store.ok()) << store.error();
+  EXPECT_EQ(store->tileIds().size(), FailingOverwrite::kTiles);
+}
+
+TEST(MapBuilder, ProgressCallbackThatThrowsFailsTheBuildCleanly) {
+  // Regression: an exception from the callback left finish() with its workers still joinable,
+  // and destroying them called std::terminate. It is a failure with the exception's text now.
+  FailingOverwrite f;
+  for (int threads : {1, 4}) {
+    for (uint64_t k : {uint64_t{1}, uint64_t{8}, FailingOverwrite::kTiles}) {
+      SCOPED_TRACE("threads " + std::to_string(threads) + ", throws at tile " + std::to_string(k));
+      const std::string what = "callback failure at tile " + std::to_string(k);
+      auto st = f.overwrite(threads, [&](const BuildProgress& p) -> bool {
+        if (p.tiles_done == k) throw std::runtime_error(what);
+        return true;
+      });
+      ASSERT_FALSE(st.ok());
+      EXPECT_NE(st.error().find("progress callback threw: " + what), std::string::npos)
+          << st.error();
+      f.expectOldMapOnly();
+    }
+  }
+  auto st = f.overwrite(2, [](const BuildProgress&) -> bool { throw 42; });
+  ASSERT_FALSE(st.ok());
+  EXPECT_NE(st.error().find("unknown type"), std::string::npos) << st.error();
+  f.expectOldMapOnly();
+  // Once the map is committed a throwing callback (the kDone call) cannot fail the build.
+  st = f.overwrite(2, [](const BuildProgress& p) -> bool {
+    if (p.stage == BuildProgress::Stage::kDone) throw std::runtime_error("after the commit");
+    return true;
+  });
+  ASSERT_TRUE(st.ok()) << st.error();
+  auto store = MapStore::open(f.dir.path);
+  ASSERT_TRUE(store.ok()) << store.error();
+  EXPECT_EQ(store->tileIds().size(), FailingOverwrite::kTiles);
+  EXPECT_EQ(f.dir.entries().size(), FailingOverwrite::kTiles + 1);
+}
+
 /// Writes a staging directory as a build killed during the swap leaves it (journal: `names`).
 void writeDeadStaging(const std::string& dir, const std::vector<std::string>& names) {
   // pid 2^22 + 1 is above Linux's pid_max limit: no such process can exist.
@@ -529,7 +653,7 @@ void writeDeadStaging(const std::string& dir, const std::vector<std::string>& na
 }
 
 TEST(MapBuilder, RecoversFromABuildKilledDuringTheSwap) {
-  TempDir dir, other;
+  TempDir dir("gmm_map_builder"), other("gmm_map_builder");
   World old_world, new_world;
   old_world.plane(0.0, 12.0, 0.0, 12.0, 0.5);  // 2 x 2 tiles of 6.4 m
   new_world.plane(0.0, 20.0, 0.0, 20.0, 2.0);  // 4 x 4 tiles
@@ -605,7 +729,7 @@ TEST(MapBuilder, RecoversFromABuildKilledDuringTheSwap) {
 }
 
 TEST(MapBuilder, OneBuilderPerOutputDirectory) {
-  TempDir dir;
+  TempDir dir("gmm_map_builder");
   World w;
   w.plane(0.0, 2.0, 0.0, 2.0, 0.0);
   auto first = MapBuilder::create(options(dir.path));

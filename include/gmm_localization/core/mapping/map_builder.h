@@ -44,6 +44,10 @@
 //
 // Threading: addBatch() and finish() must be called from one thread (the caller's); finish()
 // uses worker threads internally and calls the progress callback from the caller's thread.
+// finish() joins its workers before it returns, on every path. A worker's failure (an I/O error,
+// an exception such as std::bad_alloc), a progress callback that throws, or threads that cannot
+// be started fail the build with a reason like any other error; no exception leaves the
+// builder's API (create, addBatch, finish, addAllBatches), and nothing calls std::terminate.
 //
 // Replacing a map: a build never writes into the map in place. create() takes an exclusive
 // flock(2) on the output directory (a second builder of the same directory, in any process,
@@ -61,16 +65,17 @@
 //     `<output>/manifest.gmm`. That one rename is the commit: before it the directory holds the
 //     old map, byte-identical, after it the new one, complete;
 //  5. it deletes the old map's tile files, then the staging directory.
-// A failure before the commit (I/O error, full disk, cancel, no points) removes what the build
-// moved in and its staging directory: the output directory is as it was. A process killed
-// outright leaves its staging directory; the next create() on that directory (holding the lock,
-// it knows the owner is gone) deletes every file the journal names that the manifest then in
-// place does not reference, which undoes a half-done step 3 or completes step 5, and then the
-// staging directory. A staging directory never holds a `manifest.gmm`, and MapStore reads only
-// the files its manifest names, so a half-written build is never taken for a map. Where flock is
-// not supported (some network file systems) there is no lock, and only staging directories whose
-// process no longer exists are recovered. A process that opened the old map (MapStore reads the
-// manifest once) sees its tiles vanish at step 5: restart it on the new map.
+// A failure before the commit (I/O error, full disk, cancel, no points, the staging directory
+// removed by someone else mid-build) removes what the build moved in and its staging directory:
+// the output directory is as it was. A process killed outright leaves its staging directory;
+// the next create() on that directory (holding the lock, it knows the owner is gone) deletes
+// every file the journal names that the manifest then in place does not reference, which undoes
+// a half-done step 3 or completes step 5, and then the staging directory. A staging directory
+// never holds a `manifest.gmm`, and MapStore reads only the files its manifest names, so a
+// half-written build is never taken for a map. Where flock is not supported (some network file
+// systems) there is no lock, and only staging directories whose process no longer exists are
+// recovered. A process that opened the old map (MapStore reads the manifest once) sees its tiles
+// vanish at step 5: restart it on the new map.
 // Disk space: until the commit, the old map, the new map and the spill files coexist; a full disk
 // fails the build with an error starting "no space left on device", the old map intact.
 //
@@ -152,6 +157,7 @@ struct BuildProgress {
   uint64_t work_total = 0;
 };
 /// Called from finish()'s calling thread after every tile; return false to cancel the build.
+/// An exception it throws fails the build (before the commit) or is ignored (the kDone call).
 using BuildProgressCallback = std::function<bool(const BuildProgress&)>;
 
 class MapBuilder {
@@ -169,8 +175,10 @@ class MapBuilder {
   Status addBatch(const PointBatch& batch);
 
   /// Pass 2 and the swap. Call once; the builder is spent afterwards (and the lock released).
-  /// Fails, leaving the output directory as it was, when no point was kept, on I/O errors, when
-  /// the callback cancels, or when the directory gained a map meanwhile and overwrite is false.
+  /// Fails, leaving the output directory as it was, when no point was kept, on I/O errors
+  /// (the staging directory vanishing included), when the callback cancels or throws, or when
+  /// the directory gained a map meanwhile and overwrite is false. Joins its worker threads
+  /// before returning, whatever happened.
   Result<MapBuildStats> finish(const BuildProgressCallback& progress = {});
 
   /// Counters so far (pass 1 counters grow with addBatch; the rest are set by finish()).
