@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The README's test command: installs what is missing, builds, runs every test tier (unit,
-# ROS-side gtests, rostests with the real launch files), the static checks and the sanitizer
-# pass. Exit status is non-zero when anything fails.
+# ROS-side gtests, rostests with the real launch files), the static checks, the sanitizer pass
+# and the fuzz pass. Exit status is non-zero when anything fails.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/env.sh"
 "$GMM_REPO/scripts/install_deps.sh"
@@ -21,5 +21,11 @@ catkin_test_results --verbose "$GMM_BUILD/test_results" | tail -n 40
 # after the reports.
 sanitizers_ok=true
 "$GMM_REPO/scripts/run_sanitizers.sh" || sanitizers_ok=false
+# The fuzz pass: libFuzzer targets of every parser of outside input, built with clang-14
+# (ASan+UBSan), the reproducers of test/fuzz/regressions replayed, then 10 s of fuzzing per
+# target here (GMM_FUZZ_TIME; scripts/run_fuzz.sh alone: 20 s; docs/fuzzing.md). Its status
+# counts like the sanitizers'.
+fuzz_ok=true
+GMM_FUZZ_TIME="${GMM_FUZZ_TIME:-10}" "$GMM_REPO/scripts/run_fuzz.sh" || fuzz_ok=false
 catkin_test_results "$GMM_BUILD/test_results" >/dev/null
-$sanitizers_ok
+$sanitizers_ok && $fuzz_ok

@@ -1,6 +1,7 @@
 #include "gmm_localization/ros/chunk_conversion.h"
 
 #include <cmath>
+#include <sstream>
 
 #include "gmm_localization/core/map/map_format.h"
 
@@ -13,6 +14,40 @@ namespace {
 /// difference of a z bin and a span start (MapChunk::spanValue, the search's z loops) far
 /// inside int32.
 constexpr int64_t kMaxAbsZBin = int64_t{1} << 24;
+
+/// The smallest component sigma the map format encodes (map_format.h: ln sigma uniform in
+/// [ln 1e-4 m, ln 1e4 m]; encodeTile refuses smaller ones, decodeTile cannot produce them), so
+/// the smallest any map server sends. A smaller positive sigma is no map's: 1 / sigma
+/// overflows float from about 3e-39 m (MixtureLogTerms::inv_sigma = inf, a NaN log-likelihood).
+constexpr float kMinComponentSigmaM = 1e-4f;
+
+/// Empty when component j of cell i is within the map format's bounds, else why, naming the
+/// cell (index and x, y within the chunk), the component and the field.
+std::string checkComponent(const GaussianComponent& g, size_t i, int cells, int j) {
+  const char* why = nullptr;
+  if (!std::isfinite(g.weight)) {
+    why = "weight is not finite";
+  } else if (!std::isfinite(g.mean_m)) {
+    why = "mean is not finite";
+  } else if (!std::isfinite(g.sigma_m)) {
+    why = "sigma is not finite";
+  } else if (!(g.weight > 0.f && g.weight <= 1.0001f)) {
+    why = "weight outside (0, 1.0001]";
+  } else if (!(std::abs(g.mean_m) <= kMaxMapHeightM)) {
+    why = "mean beyond the map format's height bound";
+  } else if (!(g.sigma_m >= kMinComponentSigmaM)) {
+    why = "sigma below the map format's smallest, 1e-4 m";
+  } else if (!(g.sigma_m <= kMaxComponentSigmaM)) {
+    why = "sigma beyond the map format's largest";
+  } else {
+    return {};
+  }
+  std::ostringstream s;
+  s << "cell " << i << " (x " << i % cells << ", y " << i / cells << ") has an invalid component "
+    << j << " (weight " << g.weight << ", mean " << g.mean_m << " m, sigma " << g.sigma_m
+    << " m): " << why;
+  return s.str();
+}
 
 }  // namespace
 
@@ -114,12 +149,8 @@ Result<MapChunkConstPtr> fromMsg(const RasterChunk::ConstPtr& msg) {
     for (int j = 0; j < k; ++j, c += 3) {
       if (c + 3 > msg->components.size()) return R::failure("components array too short");
       const GaussianComponent g{msg->components[c], msg->components[c + 1], msg->components[c + 2]};
-      if (!(g.weight > 0.f && g.weight <= 1.0001f && g.sigma_m > 0.f &&
-            g.sigma_m <= kMaxComponentSigmaM && std::abs(g.mean_m) <= kMaxMapHeightM)) {
-        return R::failure("cell " + std::to_string(i) + " has an invalid component (weight " +
-                          std::to_string(g.weight) + ", mean " + std::to_string(g.mean_m) +
-                          " m, sigma " + std::to_string(g.sigma_m) + " m)");
-      }
+      const std::string bad = checkComponent(g, i, chunk->cells(), j);
+      if (!bad.empty()) return R::failure(bad);
       mixtures[i].add(g);
     }
   }

@@ -137,14 +137,27 @@ Result<CloudData> fromMsg(const sensor_msgs::PointCloud2& msg) {
   const double time_scale = (ft != nullptr && ft->datatype == PointField::UINT32) ? 1e-9 : 1.0;
 
   CloudData out;
+  // Width or height 0: the empty cloud, every channel empty (the callers' "0 points" case: the
+  // matcher drops it with a reason, the merger and evaluate pass it on). Returned before the
+  // loops, which would otherwise visit every one of up to 2^32 - 1 empty rows: with no points
+  // each size check above holds for any height, row_step 0 and no data.
+  if (n == 0) return out;
+  // From here width >= 1 and point_step >= 1, so row_step >= 1 and the data holds exactly
+  // data.size() / row_step = height rows: the row loop is bounded by the data, not by height.
+  const size_t rows = msg.data.size() / msg.row_step;
+  if (rows != msg.height) {
+    return R::failure("data of " + std::to_string(msg.data.size()) + " bytes holds " +
+                      std::to_string(rows) + " rows of row_step " + std::to_string(msg.row_step) +
+                      ", not height " + std::to_string(msg.height));
+  }
   out.points.resize(n);
   if (ft) out.time_s.resize(n);
   if (fi) out.intensity.resize(n);
   if (fr) out.ring.resize(n);
   if (fl) out.label.resize(n);
   size_t i = 0;
-  for (uint32_t row = 0; row < msg.height; ++row) {
-    const uint8_t* base = msg.data.data() + static_cast<size_t>(row) * msg.row_step;
+  for (size_t row = 0; row < rows; ++row) {
+    const uint8_t* base = msg.data.data() + row * msg.row_step;
     for (uint32_t col = 0; col < msg.width; ++col, ++i) {
       const uint8_t* p = base + static_cast<size_t>(col) * msg.point_step;
       out.points[i] = Eigen::Vector3f(toFloat(readNumber(p + fx->offset, fx->datatype)),

@@ -4,6 +4,7 @@
 #include "gmm_localization/ros/chunk_conversion.h"
 
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -217,6 +218,69 @@ TEST(ChunkConversion, ExtremeIntegerAndComponentFieldsAreRejected) {
   expectRejected([](RasterChunk& m) { m.components.at(2) = INFINITY; }, "invalid component");
   expectRejected([](RasterChunk& m) { m.components.at(2) = 5e3f; }, "sigma 5000");
   expectRejected([](RasterChunk& m) { m.components.at(0) = NAN; }, "invalid component");
+}
+
+/// Index in msg.components of component j of the first cell with at least `k` components; the
+/// cell's index in `cell`.
+size_t componentOfFirstCellWith(const RasterChunk& m, int k, int j, size_t* cell) {
+  size_t c = 0;
+  for (size_t i = 0; i < m.component_count.size(); ++i) {
+    if (m.component_count[i] >= k) {
+      *cell = i;
+      return c + 3 * j;
+    }
+    c += 3 * m.component_count[i];
+  }
+  ADD_FAILURE() << "no cell with " << k << " components";
+  return 0;
+}
+
+// Fuzz reproducer test/fuzz/regressions/raster_chunk/nan_log_terms_subnormal_sigma: a
+// two-component cell whose first sigma is 1e-39 m (subnormal) was accepted (sigma > 0), and
+// MixtureLogTerms then held 1 / sigma = inf and a NaN log-likelihood at the mean. Now every
+// sigma below the map format's smallest (1e-4 m) and every non-finite field is rejected, naming
+// the cell, the component and the field.
+TEST(ChunkConversion, SigmaBelowTheFormatsSmallestAndNonFiniteFieldsAreRejected) {
+  const RasterChunk::Ptr good = toMessage(*rasterized());
+  size_t cell = 0;
+  const size_t c = componentOfFirstCellWith(*good, 2, 0, &cell);
+  const std::string name = "cell " + std::to_string(cell) + " (x " + std::to_string(cell % 16) +
+                           ", y " + std::to_string(cell / 16) + ") has an invalid component 0";
+  auto rejected = [&](size_t field, float value, const std::string& why) {
+    auto msg = boost::make_shared<RasterChunk>(*good);
+    msg->components.at(c + field) = value;
+    auto r = fromMsg(msg);
+    ASSERT_FALSE(r.ok()) << "accepted component field " << field << " = " << value;
+    EXPECT_NE(r.error().find(name), std::string::npos) << r.error();
+    EXPECT_NE(r.error().find(why), std::string::npos) << r.error();
+  };
+  rejected(2, 1e-39f, "sigma below the map format's smallest, 1e-4 m");  // the reproducer
+  EXPECT_NE(std::fpclassify(1e-39f), FP_NORMAL);
+  rejected(2, std::numeric_limits<float>::denorm_min(), "sigma below");
+  rejected(2, std::nextafter(1e-4f, 0.f), "sigma below");
+  rejected(2, -1e-3f, "sigma below");
+  rejected(2, NAN, "sigma is not finite");
+  rejected(2, INFINITY, "sigma is not finite");
+  rejected(0, INFINITY, "weight is not finite");
+  rejected(0, NAN, "weight is not finite");
+  rejected(0, 1.5f, "weight outside");
+  rejected(1, -INFINITY, "mean is not finite");
+  rejected(1, NAN, "mean is not finite");
+  rejected(1, 2e4f, "mean beyond");
+  // The format's smallest sigma itself is accepted, with finite log terms (as the search reads
+  // the cell: at the mean and far from it).
+  auto msg = boost::make_shared<RasterChunk>(*good);
+  msg->components.at(c + 2) = 1e-4f;
+  auto ok = fromMsg(msg);
+  ASSERT_TRUE(ok.ok()) << ok.error();
+  const int lx = static_cast<int>(cell % 16), ly = static_cast<int>(cell / 16);
+  const GaussianMixture1D& g = (*ok)->mixture(lx, ly);
+  ASSERT_EQ(g.size(), good->component_count[cell]);
+  for (double z : {double{g.component(0).mean_m}, double{g.component(1).mean_m}, 1e4, -1e4}) {
+    EXPECT_FALSE(std::isnan((*ok)->logTerms(lx, ly).logLikelihood(z))) << z;
+    EXPECT_FALSE(std::isnan(g.logLikelihood(z))) << z;
+  }
+  EXPECT_TRUE(std::isfinite((*ok)->logTerms(lx, ly).inv_sigma[0]));
 }
 
 }  // namespace

@@ -20,8 +20,11 @@ void toMsg(const MapChunk& chunk, uint64_t map_version, const std::string& frame
 
 /// Wraps a received chunk message. Fails, naming the problem, when its sizes are inconsistent
 /// or any field is out of range: shift outside [4, 10], z_shift outside [0, 16], a span's z bins
-/// beyond +-2^24, a component beyond the map format's physical bounds (map_format.h). Every
-/// integer is range-checked before arithmetic, so no input causes signed overflow.
+/// beyond +-2^24, a component outside what the map format holds (map_format.h): weight, mean and
+/// sigma finite, weight in (0, 1], |mean| <= kMaxMapHeightM, sigma in [1e-4 m (the format's
+/// smallest), kMaxComponentSigmaM]; the reason names the cell, the component and the field.
+/// Every integer is range-checked before arithmetic, so no input causes signed overflow, and
+/// every accepted mixture has finite 1 / sigma and log-likelihoods (never NaN).
 Result<MapChunkConstPtr> fromMsg(const RasterChunk::ConstPtr& msg);
 
 }  // namespace node

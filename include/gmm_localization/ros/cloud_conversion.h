@@ -29,7 +29,9 @@ struct CloudData {
 /// [0, 65535] resp. [0, 255] (fractions are truncated): otherwise the whole cloud is rejected,
 /// naming the field, the point and the value (a sensor driver emitting such values is broken,
 /// and silently clamping would mislabel points). Float values beyond the float32 range (from
-/// float64 fields) become +-inf.
+/// float64 fields) become +-inf. A cloud with width or height 0 that passes the size and field
+/// checks is the empty cloud (0 points, every channel empty), whatever the other dimension; the
+/// work is bounded by the data (never by width x height alone).
 Result<CloudData> fromMsg(const sensor_msgs::PointCloud2& msg);
 
 /// Writes x, y, z (float32) and, when their sizes match, intensity, time, ring and label.

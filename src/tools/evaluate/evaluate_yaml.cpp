@@ -99,6 +99,13 @@ XmlRpcValue scalar(const YAML::Node& n, const std::string& where) {
   return XmlRpcValue(s);
 }
 
+/// "line L, column C: " of a YAML mark (1-based), empty when the mark is unknown.
+std::string markText(const YAML::Mark& mark) {
+  if (mark.is_null()) return {};
+  return "line " + std::to_string(mark.line + 1) + ", column " + std::to_string(mark.column + 1) +
+         ": ";
+}
+
 XmlRpcValue convert(const YAML::Node& n, const std::string& where) {
   switch (n.Type()) {
     case YAML::NodeType::Null:
@@ -120,6 +127,14 @@ XmlRpcValue convert(const YAML::Node& n, const std::string& where) {
       XmlRpcValue s;
       s.begin();  // makes an empty struct
       for (const auto& kv : n) {
+        // A parameter name is a scalar; a sequence or map key ("[a]: 1", "{a: 1}: 2") has no
+        // name (rosparam refuses it too) and must not reach as<std::string>(), which throws
+        // YAML::TypedBadConversion. A null key ("~: 1") reads as "null", as before.
+        if (!kv.first.IsScalar() && !kv.first.IsNull()) {
+          throw ConfigError(where + ": " + markText(kv.first.Mark()) + "a mapping key is a " +
+                            (kv.first.IsSequence() ? "sequence" : "map") +
+                            ", not a parameter name");
+        }
         const std::string key = kv.first.as<std::string>();
         const XmlRpcValue v = convert(kv.second, where + "/" + key);
         if (v.valid()) s[key] = v;
@@ -154,6 +169,11 @@ XmlRpc::XmlRpcValue yamlFileToXmlRpc(const std::string& path) {
   XmlRpcValue tree;
   try {
     tree = convert(root, path);
+  } catch (const YAML::Exception& e) {
+    // Any other yaml-cpp error while walking the tree (as in yamlTextToXmlRpc): a ConfigError
+    // naming the file and, when yaml-cpp knows it, the line (e.msg is without yaml-cpp's own
+    // "error at line" prefix).
+    throw ConfigError(path + ": " + markText(e.mark) + "YAML error: " + e.msg);
   } catch (const std::logic_error& e) {
     if (dynamic_cast<const ConfigError*>(&e) == nullptr) {
       throw ConfigError(path + ": bad number: " + e.what());

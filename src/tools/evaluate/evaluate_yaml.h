@@ -24,7 +24,8 @@ namespace gmm_localization {
 namespace eval {
 
 /// Parses a YAML document into an XmlRpc tree (maps -> structs, sequences -> arrays).
-/// Throws node::ConfigError naming the file and the problem.
+/// Throws node::ConfigError naming the file and the problem (with the line where yaml-cpp knows
+/// it), and nothing else: e.g. a mapping key that is a sequence or a map ("[a]: 1").
 XmlRpc::XmlRpcValue yamlFileToXmlRpc(const std::string& path);
 /// Parses YAML text (a whole document or one scalar, e.g. an override "0.25" or "[1, 2]").
 XmlRpc::XmlRpcValue yamlTextToXmlRpc(const std::string& text, const std::string& origin);

@@ -110,6 +110,49 @@ TEST(EvaluateParams, BadValuesNameTheFileAndKey) {
   EXPECT_THROW(yamlParamSource(kConfig + "/matcher.yaml", {"no_equals_sign"}), node::ConfigError);
 }
 
+// Fuzz reproducer test/fuzz/regressions/yaml_params/uncaught_bad_conversion_sequence_key.yaml
+// ("[a]: 1"): a mapping key that is a sequence or a map threw YAML::TypedBadConversion out of
+// yamlFileToXmlRpc instead of a ConfigError naming the file. Now a ConfigError with the file,
+// the key's place in the tree and its line; the same through the overrides.
+TEST(EvaluateParams, NonScalarMappingKeysAreConfigErrorsNamingTheFileAndLine) {
+  struct Case {
+    const char* text;
+    const char* expected;  // after the path
+  };
+  for (const Case& c : {
+           Case{"[a]: 1\n", ": line 1, column 1: a mapping key is a sequence"},
+           Case{"{a: 1}: 2\n", ": line 1, column 1: a mapping key is a map"},
+           Case{"ok: 1\nx: {[b]: 1}\n", "/x: line 2, column 5: a mapping key is a sequence"},
+           Case{"ns:\n  inner:\n    ? [1, 2]\n    : 3\n",
+                "/ns/inner: line 3, column 7: a mapping key is a sequence"},
+       }) {
+    const std::string path = writeTemp("key.yaml", c.text);
+    try {
+      yamlFileToXmlRpc(path);
+      ADD_FAILURE() << "accepted " << c.text;
+    } catch (const node::ConfigError& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(path + c.expected, 0), 0u) << e.what();
+    } catch (const std::exception& e) {
+      ADD_FAILURE() << "not a ConfigError: " << e.what();
+    }
+    EXPECT_THROW(yamlParamSource(path), node::ConfigError) << c.text;
+  }
+  try {
+    yamlParamSource(kConfig + "/matcher.yaml", {"window={[a]: 1}"});
+    ADD_FAILURE() << "accepted a sequence key in an override";
+  } catch (const node::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("override window: line 1, column 2: a mapping key"),
+              std::string::npos)
+        << e.what();
+  }
+  // Scalar keys of every kind still load (a null key reads "null", as before).
+  const node::ParamSource s = yamlParamSource(writeTemp("keys.yaml", "'q': 1\n7: 2\n~: 3\n"));
+  int v = 0;
+  EXPECT_TRUE(s.getParam("q", v) && v == 1);
+  EXPECT_TRUE(s.getParam("7", v) && v == 2);
+  EXPECT_TRUE(s.getParam("null", v) && v == 3);
+}
+
 }  // namespace
 }  // namespace eval
 }  // namespace gmm_localization

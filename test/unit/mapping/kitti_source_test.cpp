@@ -1,7 +1,5 @@
 #include "gmm_localization/core/mapping/kitti_source.h"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -12,20 +10,14 @@
 
 #include "gmm_localization/core/map/map_store.h"
 #include "gmm_localization/core/mapping/map_builder.h"
+#include "support/temp_dir.h"
 
 namespace gmm_localization {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct TempDir {
-  TempDir() {
-    char tmpl[] = "/tmp/gmm_kitti_XXXXXX";
-    path = ::mkdtemp(tmpl);
-  }
-  ~TempDir() { fs::remove_all(path); }
-  std::string path;
-};
+using testing::TempDir;
 
 void writeScan(const std::string& path, const std::vector<std::array<float, 4>>& pts, bool xyzi) {
   std::ofstream f(path, std::ios::binary);
@@ -40,7 +32,7 @@ void writeScan(const std::string& path, const std::vector<std::array<float, 4>>&
 }
 
 TEST(KittiSource, ReadsBothPoseFormatsAndLayouts) {
-  TempDir d;
+  TempDir d("gmm_kitti");
   // KITTI odometry layout: velodyne/NNNNNN.bin (xyzi) and poses.txt with 3x4 rows. Scan 0
   // holds 3 points (48 bytes, ambiguous by size): under velodyne/ it is read as xyzi.
   fs::create_directory(d.path + "/velodyne");
@@ -65,7 +57,7 @@ TEST(KittiSource, ReadsBothPoseFormatsAndLayouts) {
   EXPECT_FALSE(*(*src)->next(b));
 
   // Keyframe layout: NNNNNN/points.bin (xyz) and graph lines with ids.
-  TempDir k;
+  TempDir k("gmm_kitti");
   for (int i : {0, 3}) {
     fs::create_directory(k.path + "/00000" + std::to_string(i));
     writeScan(k.path + "/00000" + std::to_string(i) + "/points.bin",
@@ -88,7 +80,7 @@ TEST(KittiSource, ReadsBothPoseFormatsAndLayouts) {
 }
 
 TEST(KittiSource, FieldLayoutDetectionAndErrors) {
-  TempDir d;
+  TempDir d("gmm_kitti");
   writeScan(d.path + "/a.bin", std::vector<std::array<float, 4>>(4, {1, 2, 3, 4}), false);  // 48 B
   auto ambiguous = readKittiScan(d.path + "/a.bin", KittiFields::kAuto);
   ASSERT_FALSE(ambiguous.ok());
@@ -123,13 +115,46 @@ TEST(KittiSource, FieldLayoutDetectionAndErrors) {
   EXPECT_FALSE(parseIndexList("5-3").ok());
 }
 
+// Fuzz reproducer test/fuzz/regressions/kitti/oom_index_list_60_ranges_of_1e7: 60 ranges of
+// 10^7 indices each (660 characters) made 6 x 10^8 ints (2.4 GB). Now the list as a whole holds
+// at most kMaxIndexListSize = 10^7 indices, with an error naming the item that exceeds it.
+TEST(KittiSource, IndexListTotalIsBounded) {
+  std::string sixty;
+  for (int i = 0; i < 60; ++i) sixty += (i ? ",0-" : "0-") + std::to_string(10000000);
+  ASSERT_EQ(sixty.size(), 60u * 10 + 59);
+  auto oom = parseIndexList(sixty);
+  ASSERT_FALSE(oom.ok());
+  EXPECT_NE(oom.error().find("holds more than 10000000 indices (0 before '0-10000000', which "
+                             "adds 10000001)"),
+            std::string::npos)
+      << oom.error();
+  EXPECT_LT(oom.error().size(), 200u) << "the long list is quoted in part";
+  // Ranges that are each small but sum beyond the bound, and single indices past it.
+  auto sum = parseIndexList("0-4999999,5000000-9999999,7");
+  ASSERT_FALSE(sum.ok());
+  EXPECT_NE(sum.error().find("10000000 before '7', which adds 1"), std::string::npos)
+      << sum.error();
+  auto repeats = parseIndexList("0-5999999,0-5999999");
+  ASSERT_FALSE(repeats.ok());
+  EXPECT_NE(repeats.error().find("holds more than"), std::string::npos) << repeats.error();
+  // Exactly the bound is accepted.
+  auto full = parseIndexList("0-4999999,5000000-9999999");
+  ASSERT_TRUE(full.ok()) << full.error();
+  ASSERT_EQ(full->size(), kMaxIndexListSize);
+  EXPECT_EQ(full->back(), 9999999);
+  // A range ending at INT_MAX stops there (no overflow of the loop index).
+  auto top = parseIndexList("2147483646-2147483647");
+  ASSERT_TRUE(top.ok()) << top.error();
+  EXPECT_EQ(*top, (std::vector<int>{2147483646, 2147483647}));
+}
+
 // Real scans: five KITTI 07 keyframes (HDL-64E, sensor about 1.73 m above the road).
 TEST(KittiRealData, MapHasAPlausibleGroundComponent) {
   const std::string dir = std::string(GMM_SHARED_DATA_DIR) + "/real/kitti07_keyframes";
   if (!fs::exists(dir + "/graph.txt")) {
     GTEST_SKIP() << "real data absent: " << dir << " (see ../shared/data/real/README.md)";
   }
-  TempDir out;
+  TempDir out("gmm_kitti");
   KittiSourceOptions ko;
   ko.scans_directory = dir;
   ko.fields = KittiFields::kXyz;  // the keyframes are x, y, z only

@@ -20,6 +20,7 @@
 // (readKittiCalibTr) as pose_T_sensor = Tr and map_T_world = Tr^-1, so the map frame is the
 // first Velodyne frame (z up). The keyframe graphs are Velodyne poses already (identity).
 
+#include <cstddef>
 #include <map>
 #include <memory>
 #include <string>
@@ -49,7 +50,11 @@ Result<std::map<int, Eigen::Isometry3d>> readKittiPoses(const std::string& path)
 Result<Eigen::Isometry3d> readKittiCalibTr(const std::string& path);
 /// One scan's points in the sensor frame.
 Result<std::vector<Eigen::Vector3f>> readKittiScan(const std::string& path, KittiFields fields);
-/// "0,2,4-7" -> {0, 2, 4, 5, 6, 7}; fails on anything else.
+/// Bound on the indices of one index list, its ranges summed (repeats count): 10^7 (40 MB of
+/// ints, far beyond any sequence's scans), so a short argument cannot allocate gigabytes.
+constexpr size_t kMaxIndexListSize = 10000000;
+/// "0,2,4-7" -> {0, 2, 4, 5, 6, 7}; fails on anything else, and on a list of more than
+/// kMaxIndexListSize indices (naming the item that exceeds it).
 Result<std::vector<int>> parseIndexList(const std::string& text);
 
 class KittiScanSource : public PointBatchSource {
