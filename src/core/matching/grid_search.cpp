@@ -6,10 +6,7 @@
 #include "search_node.h"
 
 namespace gmm_localization {
-namespace {
-
-using search_detail::Lower;
-using search_detail::Node;
+namespace search_detail {
 
 SearchOutcome makeOutcome(const SearchProblem& problem, int j, int tx, int ty, int64_t score,
                           SearchStats stats) {
@@ -24,6 +21,14 @@ SearchOutcome makeOutcome(const SearchProblem& problem, int j, int tx, int ty, i
   out.stats = std::move(stats);
   return out;
 }
+
+}  // namespace search_detail
+
+namespace {
+
+using search_detail::Lower;
+using search_detail::makeOutcome;
+using search_detail::Node;
 
 }  // namespace
 

@@ -24,6 +24,9 @@ std::string RegistrationOptions::validate() const {
   if (!e.empty()) return "covariance: " + e;
   e = certificate.validate();
   if (!e.empty()) return "certificate: " + e;
+  if (interval_search_min_headings < 1) return "interval_search_min_headings must be >= 1";
+  e = global.validate();
+  if (!e.empty()) return "global: " + e;
   if (!(min_map_coverage >= 0.0 && min_map_coverage <= 1.0)) {
     return "min_map_coverage must be in [0, 1]";
   }
@@ -48,6 +51,8 @@ const char* registrationErrorName(RegistrationError kind) {
       return "low_coverage";
     case RegistrationError::kNumerical:
       return "numerical";
+    case RegistrationError::kSearchBudget:
+      return "search_budget";
   }
   return "unknown";
 }
@@ -185,6 +190,9 @@ RegistrationResult<PreparedSearch> Registration::prepare(const ChunkMap& map,
   if (!bad_window.empty()) {
     return R::failure(RegistrationError::kInvalidWindow, "search window: " + bad_window);
   }
+  if (window.sizeH() >= options_.interval_search_min_headings && options_.global.max_points > 0) {
+    f.points = thin(f.points, options_.global.max_points);
+  }
   auto problem = SearchProblem::create(map, f.points, window);
   if (!problem.ok()) return R::failure(RegistrationError::kOffMap, problem.error());
   return PreparedSearch{std::move(f), z_offset, std::move(problem.value())};
@@ -203,16 +211,33 @@ RegistrationResult<MatchResult> Registration::match(const ChunkMap& map,
     return RegistrationResult<MatchResult>::failure(prepared.errorKind(), prepared.error());
   }
   const double t1 = tick();
-  // Algorithm 2 (reference) or 3 over x, y, heading.
-  const SearchProblem& problem = prepared->problem;
-  const SearchOutcome search =
-      options_.exhaustive ? exhaustiveSearch(problem)
-                          : branchAndBoundSearch(problem, options_.branch_and_bound, traversal);
+  bool complete = true;
+  const SearchOutcome best = search(prepared->problem, traversal, &complete);
   if (timing) {
     timing->filter_s = t1 - t0;
     timing->search_s = tick() - t1;
   }
-  return finish(map, base_points, request, std::move(prepared.value()), search, now, timing);
+  if (!complete) {
+    return RegistrationResult<MatchResult>::failure(
+        RegistrationError::kSearchBudget,
+        "search stopped at its budget of " + std::to_string(options_.global.max_evaluations) +
+            " node scores before proving an optimum (window of " +
+            std::to_string(prepared->problem.window().poses()) + " poses)");
+  }
+  return finish(map, base_points, request, std::move(prepared.value()), best, now, timing);
+}
+
+SearchOutcome Registration::search(const SearchProblem& problem,
+                                   std::vector<TraversalNode>* traversal, bool* complete) const {
+  if (complete != nullptr) *complete = true;
+  // Algorithm 2 (reference) or 3 over x, y, heading; wide heading ranges over intervals.
+  if (options_.exhaustive) return exhaustiveSearch(problem);
+  if (problem.window().sizeH() >= options_.interval_search_min_headings) {
+    GlobalSearchOutcome g = globalBranchAndBound(problem, options_.global);
+    if (complete != nullptr) *complete = g.complete;
+    return std::move(g.best);
+  }
+  return branchAndBoundSearch(problem, options_.branch_and_bound, traversal);
 }
 
 RegistrationResult<MatchResult> Registration::finish(

@@ -5,6 +5,8 @@
 
 #include <cstdint>
 
+#include "gmm_localization/core/matching/grid_search.h"
+
 namespace gmm_localization {
 namespace search_detail {
 
@@ -30,6 +32,10 @@ struct Lower {
     return keyLess(b.heading_index, b.ty, b.tx, a.heading_index, a.ty, a.tx);
   }
 };
+
+/// The outcome for leaf (j, tx, ty) with quantized score `score`: its pose and log-likelihood.
+SearchOutcome makeOutcome(const SearchProblem& problem, int j, int tx, int ty, int64_t score,
+                          SearchStats stats);
 
 }  // namespace search_detail
 }  // namespace gmm_localization

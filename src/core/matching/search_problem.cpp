@@ -117,6 +117,18 @@ RasterWindow::RasterWindow(const ChunkMap& map, int64_t gx_min, int64_t gy_min, 
   }
 }
 
+uint8_t RasterWindow::neighbourBound(int layer, int64_t gx, int64_t gy, int64_t size,
+                                     int32_t zb) const {
+  const int64_t nx = ((gx >> shift_) + 1) << shift_;
+  const int64_t ny = ((gy >> shift_) + 1) << shift_;
+  const bool right = nx < gx + size, up = ny < gy + size;
+  uint8_t v = 0;
+  if (right) v = std::max(v, value(layer, nx, gy, zb));
+  if (up) v = std::max(v, value(layer, gx, ny, zb));
+  if (right && up) v = std::max(v, value(layer, nx, ny, zb));
+  return v;
+}
+
 size_t RasterWindow::chunksPresent() const {
   return static_cast<size_t>(
       std::count_if(grid_.begin(), grid_.end(), [](const MapChunk* c) { return c != nullptr; }));
@@ -212,9 +224,10 @@ int64_t SearchProblem::score(int heading_index, int layer, int tx, int ty) const
     const int64_t gx = static_cast<int64_t>(p.gx) + tx;
     const int64_t gy = static_cast<int64_t>(p.gy) + ty;
     const MapChunk* c = raster_.chunk(gx, gy);
-    if (c == nullptr) continue;
-    sum += static_cast<int64_t>(p.count) *
-           c->value(layer, p.zb, static_cast<int>(gx & mask), static_cast<int>(gy & mask));
+    const uint8_t v = c != nullptr ? c->value(layer, p.zb, static_cast<int>(gx & mask),
+                                              static_cast<int>(gy & mask))
+                                   : raster_.blockBound(layer, gx, gy, p.zb);
+    sum += static_cast<int64_t>(p.count) * v;
   }
   return sum;
 }
@@ -242,17 +255,24 @@ void SearchProblem::scoreQuad(int heading_index, int layer, int tx, int ty, int 
         const MapChunk* c = raster_.chunk(gx, gy);
         L = c != nullptr ? &c->layer(layer) : nullptr;
       }
-      if (L == nullptr) continue;
+      if (L == nullptr) {  // not loaded: the blocks may still reach into loaded neighbours
+        if (layer == 0) continue;
+        s00 += count * raster_.blockBound(layer, gx, gy, p.zb);
+        s10 += count * raster_.blockBound(layer, gx + h, gy, p.zb);
+        s01 += count * raster_.blockBound(layer, gx, gy + h, p.zb);
+        s11 += count * raster_.blockBound(layer, gx + h, gy + h, p.zb);
+        continue;
+      }
       const size_t i = (static_cast<size_t>(ly) << shift) + static_cast<size_t>(lx);
       s00 += count * MapChunk::spanValue(*L, i, p.zb);
       s10 += count * MapChunk::spanValue(*L, i + h, p.zb);
       s01 += count * MapChunk::spanValue(*L, i + dy, p.zb);
       s11 += count * MapChunk::spanValue(*L, i + dy + h, p.zb);
     } else {
-      s00 += count * raster_.value(layer, gx, gy, p.zb);
-      s10 += count * raster_.value(layer, gx + h, gy, p.zb);
-      s01 += count * raster_.value(layer, gx, gy + h, p.zb);
-      s11 += count * raster_.value(layer, gx + h, gy + h, p.zb);
+      s00 += count * raster_.blockBound(layer, gx, gy, p.zb);
+      s10 += count * raster_.blockBound(layer, gx + h, gy, p.zb);
+      s01 += count * raster_.blockBound(layer, gx, gy + h, p.zb);
+      s11 += count * raster_.blockBound(layer, gx + h, gy + h, p.zb);
     }
   }
   out[0] = s00;

@@ -3,6 +3,7 @@
 // tracking window, success and time of PCL NDT and GICP from the same offsets, and time against
 // scan size. All numbers come from this run, as ratios where the machine's noise matters.
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -44,6 +45,9 @@ struct Options {
   double offset_m = 10.0, offset_deg = 15.0;
   double raster_radius_m = 110.0;
   bool sizes = true;
+  bool global = true;
+  int global_count = 10;
+  std::vector<double> global_regions_m = {25.0, 50.0, 100.0};
   RegistrationOptions reg;
   RasterOptions raster;
 };
@@ -67,6 +71,13 @@ void usage() {
       "  --z-period N         raster z coarsening period (raster default)\n"
       "  --layers N           raster layers (raster default)\n"
       "  --refine-points N    points the hill climb scores (registration default)\n"
+      "  --global-count N     scans per global-localization row (10; first N of the test scans)\n"
+      "  --global-regions A,B square region edges of the global rows [m] (25,50,100)\n"
+      "  --global-points N    search points of the global search (registration default)\n"
+      "  --global-budget N    node scores the global search may compute (default: unbounded)\n"
+      "  --global-root-headings L  root heading intervals of 2^L headings (default)\n"
+      "  --global-split-share S    heading-vs-translation split rule (default)\n"
+      "  --no-global          skip the global-localization table\n"
       "  --no-sizes           skip the scan-size table\n");
 }
 
@@ -78,6 +89,10 @@ bool parse(int argc, char** argv, Options& o) {
     if (a == "--help" || a == "-h") return false;
     if (a == "--no-sizes") {
       o.sizes = false;
+      continue;
+    }
+    if (a == "--no-global") {
+      o.global = false;
       continue;
     }
     if ((v = next()) == nullptr) {
@@ -92,6 +107,24 @@ bool parse(int argc, char** argv, Options& o) {
       o.mapping_dir = v;
     else if (a == "--count")
       o.count = std::atoi(v);
+    else if (a == "--global-count")
+      o.global_count = std::atoi(v);
+    else if (a == "--global-regions") {
+      o.global_regions_m.clear();
+      for (const char* q = v; *q != '\0';) {
+        char* end = nullptr;
+        o.global_regions_m.push_back(std::strtod(q, &end));
+        if (end == q) break;
+        q = *end == ',' ? end + 1 : end;
+      }
+    } else if (a == "--global-points")
+      o.reg.global.max_points = static_cast<size_t>(std::atoi(v));
+    else if (a == "--global-budget")
+      o.reg.global.max_evaluations = std::atoll(v);
+    else if (a == "--global-root-headings")
+      o.reg.global.root_heading_levels = std::atoi(v);
+    else if (a == "--global-split-share")
+      o.reg.global.heading_split_share = std::atof(v);
     else if (a == "--peer-count")
       o.peer_count = std::atoi(v);
     else if (a == "--exhaustive-every")
@@ -169,8 +202,14 @@ void runWindow(const Options& o, const ChunkMap& map, const std::vector<BenchSca
       continue;
     }
     const double t1 = now();
-    const SearchOutcome bb = branchAndBoundSearch(prepared->problem, o.reg.branch_and_bound);
+    bool complete = true;
+    const SearchOutcome bb = reg.search(prepared->problem, nullptr, &complete);
     const double t2 = now();
+    if (!complete) {
+      ++row.failures;
+      std::fprintf(stderr, "scan %d: search stopped at its budget\n", s.index);
+      continue;
+    }
     if (o.exhaustive_every > 0 && i % o.exhaustive_every == 0) checks.push_back({i, req, bb});
     const double n = static_cast<double>(prepared->problem.points(0).size());
     const double t3 = now();
@@ -248,6 +287,7 @@ void printWindows(const std::vector<WindowRow>& rows) {
 
 int main(int argc, char** argv) {
   Options o;
+  o.reg.global.max_evaluations = 0;  // the benchmark measures complete searches (--global-budget)
   if (!parse(argc, argv, o)) {
     usage();
     return 2;
@@ -298,6 +338,95 @@ int main(int argc, char** argv) {
   runWindow(o, map.value(), scans.value(), 2.0, 3.0, 1.5, 2.5, rows[1]);
   std::printf("## Search windows\n\n");
   printWindows(rows);
+
+  if (o.global && o.global_count > 0) {
+    // Global localization: a prior anywhere in a disc inside the square region, any heading;
+    // the search covers the whole square and the full turn. The map is rasterized around the
+    // priors, as the map server serves it around a rough fix: the region plus the scan reach.
+    std::printf("\n## Global localization (heading-interval branch-and-bound, one thread)\n\n");
+    std::printf(
+        "| region | loaded map | scans | poses per search (millions) | search ms median / max | "
+        "match total ms median / max | evaluations (median) | evaluations x search points, "
+        "millions (median) "
+        "| success <0.5 m, <1 deg |\n");
+    std::printf("|---|---|---|---|---|---|---|---|---|\n");
+    std::vector<BenchScan> first(scans->begin(),
+                                 scans->begin() + std::min<size_t>(scans->size(), o.global_count));
+    const double largest = *std::max_element(o.global_regions_m.begin(), o.global_regions_m.end());
+    for (double edge : o.global_regions_m) {
+      const double half = edge / 2;
+      for (double extra_m : {0.0, 100.0}) {
+        if (extra_m > 0.0 && edge < largest) continue;  // map size only for the largest region
+        std::mt19937 rng(o.seed + 7);
+        std::vector<Pose6> priors;
+        std::vector<Eigen::Vector3d> around;
+        for (const BenchScan& s : first) {
+          priors.push_back(offsetPrior(s.truth, 0.9 * half, M_PI, rng));
+          around.emplace_back(priors.back().x, priors.back().y, 0.0);
+        }
+        const double radius = half * std::sqrt(2.0) + o.reg.filter.max_range_m + extra_m;
+        RasterStats gs;
+        auto gmap = rasterizeAround(store.value(), around, radius, o.raster, gs);
+        if (!gmap.ok()) {
+          std::fprintf(stderr, "%s\n", gmap.error().c_str());
+          continue;
+        }
+        const Registration reg(o.reg);
+        std::vector<double> search_ms, total_ms, evals, lookups;
+        int ok = 0, runs = 0;
+        double poses = 0.0;
+        for (size_t i = 0; i < first.size(); ++i) {
+          MatchRequest req;
+          req.prior = priors[i];
+          req.half_x_m = req.half_y_m = half;
+          req.half_heading_rad = M_PI;
+          ++runs;
+          RegistrationTiming timing;
+          const double t0 = now();
+          auto prepared = reg.prepare(gmap.value(), first[i].points, req);
+          if (!prepared.ok()) {
+            std::fprintf(stderr, "global scan %d: %s\n", first[i].index, prepared.error().c_str());
+            continue;
+          }
+          const double t1 = now();
+          const GlobalSearchOutcome g = globalBranchAndBound(prepared->problem, o.reg.global);
+          const double t2 = now();
+          search_ms.push_back((t2 - t1) * 1e3);
+          evals.push_back(static_cast<double>(g.best.stats.evaluations));
+          lookups.push_back(static_cast<double>(g.point_lookups));
+          poses = static_cast<double>(g.best.stats.exhaustive_poses);
+          std::fprintf(stderr,
+                       "global %.0f m scan %d: %s, %.0f ms, %lld evaluations, %lld heading / %lld "
+                       "translation splits, %.1f M lookups, queue peak %lld\n",
+                       2 * half, first[i].index, g.complete ? "complete" : "budget",
+                       (t2 - t1) * 1e3, static_cast<long long>(g.best.stats.evaluations),
+                       static_cast<long long>(g.heading_splits),
+                       static_cast<long long>(g.translation_splits), g.point_lookups / 1e6,
+                       static_cast<long long>(g.best.stats.queue_peak));
+          if (!g.complete) {
+            total_ms.push_back((now() - t0) * 1e3);
+            continue;
+          }
+          auto r = reg.finish(gmap.value(), first[i].points, req, std::move(prepared.value()),
+                              g.best, now, &timing);
+          total_ms.push_back((now() - t0) * 1e3);
+          if (!r.ok()) {
+            std::fprintf(stderr, "global scan %d: %s\n", first[i].index, r.error().c_str());
+            continue;
+          }
+          const Pose6 t = fromIsometry(first[i].truth);
+          ok += success(std::hypot(r->pose.x - t.x, r->pose.y - t.y),
+                        std::abs(angleDiff(r->pose.yaw, t.yaw)) * 180.0 / M_PI);
+        }
+        std::printf(
+            "| %.0f m x %.0f m x 360 deg | %zu chunks, %.0f MB (radius %.0f m) | %d | %.1f | %.0f "
+            "/ %.0f | %.0f / %.0f | %.0f | %.1f | %d/%d |\n",
+            2 * half, 2 * half, gs.chunks, gs.bytes / 1e6, radius, runs, poses / 1e6,
+            median(search_ms), percentile(search_ms, 100), median(total_ms),
+            percentile(total_ms, 100), median(evals), median(lookups) / 1e6, ok, runs);
+      }
+    }
+  }
 
   if (o.peer_count > 0 && !o.mapping_dir.empty()) {
     std::printf("\n## Peers from the same offsets (within %.0f m, %.0f deg)\n\n", o.offset_m,

@@ -8,42 +8,11 @@
 #include <gtest/gtest.h>
 
 #include "gmm_localization/core/raster/rasterizer.h"
+#include "support/random_chunk_map.h"
 #include "support/random_map.h"
 
 namespace gmm_localization {
 namespace {
-
-MapGeometry geometry() {
-  MapGeometry g;
-  g.resolution_m = 0.2;
-  g.tile_size_cells = 40;
-  g.origin_x_m = -4.1;
-  g.origin_y_m = 2.3;
-  return g;
-}
-
-ChunkMap rasterize(const GmmMap& map, const RasterOptions& o) {
-  ChunkMap chunks(map.geometry(), o);
-  for (int cy = -4; cy <= 3; ++cy) {
-    for (int cx = -4; cx <= 3; ++cx) {
-      auto r = rasterizeChunk(map, {cx, cy}, o);
-      EXPECT_TRUE(r.ok()) << r.error();
-      chunks.insert(r.value());
-    }
-  }
-  return chunks;
-}
-
-PointList randomPoints(std::mt19937& rng, int n, double radius) {
-  std::uniform_real_distribution<double> u(-radius, radius);
-  std::uniform_real_distribution<double> z(-1.8, 4.0);
-  PointList pts;
-  for (int i = 0; i < n; ++i) {
-    pts.emplace_back(static_cast<float>(u(rng)), static_cast<float>(u(rng)),
-                     static_cast<float>(z(rng)));
-  }
-  return pts;
-}
 
 /// A window around a uniform random prior in [-xy, xy]^2 (z in [0, z_max), any heading), with
 /// half extents in [half_min, half_min + half_span) [m] and half heading below heading_max.
@@ -69,19 +38,19 @@ void expectSame(const SearchOutcome& a, const SearchOutcome& b, int c) {
 }
 
 TEST(GridSearch, BranchAndBoundEqualsExhaustiveOnRandomCases) {
-  const GmmMap map = testing::randomMap(5, geometry(), -2, -2, 4, 4, 0.35);
+  const GmmMap map = testing::randomMap(5, testing::randomMapGeometry(), -2, -2, 4, 4, 0.35);
   for (int coarsen : {0, 1, 2}) {
     RasterOptions o;
     o.chunk_shift = 5;
     o.num_layers = 4;
     o.z_coarsening_period = coarsen;
-    const ChunkMap chunks = rasterize(map, o);
+    const ChunkMap chunks = testing::rasterizeRandomMap(map, o);
     std::mt19937 rng(100 + coarsen);
     std::uniform_real_distribution<double> u(0.0, 1.0);
     for (int c = 0; c < 60; ++c) {
       // Windows straddle tile (8 m) and chunk (6.4 m) borders.
       const SearchWindow w = randomWindow(rng, 12.0, 1.0, 0.4, 2.6, 0.1);
-      const PointList pts = randomPoints(rng, 5 + static_cast<int>(300 * u(rng)), 4.0);
+      const PointList pts = testing::randomPoints(rng, 5 + static_cast<int>(300 * u(rng)), 4.0);
       auto problem = SearchProblem::create(chunks, pts, w);
       ASSERT_TRUE(problem.ok()) << problem.error();
       const SearchOutcome ex = exhaustiveSearch(problem.value());
@@ -95,19 +64,43 @@ TEST(GridSearch, BranchAndBoundEqualsExhaustiveOnRandomCases) {
   }
 }
 
+TEST(GridSearch, BranchAndBoundEqualsExhaustiveWithChunksMissing) {
+  // A loaded region with holes: a coarse block starting in a missing chunk can still reach
+  // mapped cells of a loaded neighbour, so its bound must not read the floor there.
+  // Isolated mapped cells (97% empty) and a few far points: an optimum then hinges on one cell.
+  const GmmMap map = testing::randomMap(21, testing::randomMapGeometry(), -2, -2, 4, 4, 0.97);
+  RasterOptions o;
+  o.chunk_shift = 5;
+  o.num_layers = 4;
+  const ChunkMap full = testing::rasterizeRandomMap(map, o);
+  std::mt19937 rng(400);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int compared = 0;
+  for (int c = 0; c < 150; ++c) {
+    const ChunkMap chunks = testing::withoutSomeChunks(full, 500 + c, 0.4);
+    const SearchWindow w = randomWindow(rng, 12.0, 1.0, 0.4, 2.6, 0.1);
+    const PointList pts = testing::randomPoints(rng, 1 + static_cast<int>(4 * u(rng)), 7.0);
+    auto problem = SearchProblem::create(chunks, pts, w);
+    if (!problem.ok()) continue;  // every chunk under this window dropped
+    ++compared;
+    expectSame(exhaustiveSearch(problem.value()), branchAndBoundSearch(problem.value()), c);
+  }
+  EXPECT_GE(compared, 100);
+}
+
 TEST(GridSearch, BranchAndBoundEqualsExhaustiveWhenTheTopLayerIsCapped) {
   // Few layers: the coarsest layer tiles the window with many nodes (odd counts included),
   // scored four at a time.
-  const GmmMap map = testing::randomMap(6, geometry(), -2, -2, 4, 4, 0.35);
+  const GmmMap map = testing::randomMap(6, testing::randomMapGeometry(), -2, -2, 4, 4, 0.35);
   RasterOptions o;
   o.chunk_shift = 5;
   o.num_layers = 2;
-  const ChunkMap chunks = rasterize(map, o);
+  const ChunkMap chunks = testing::rasterizeRandomMap(map, o);
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   for (int c = 0; c < 30; ++c) {
     const SearchWindow w = randomWindow(rng, 10.0, 0.0, 1.0, 2.0, 0.05);
-    const PointList pts = randomPoints(rng, 20 + static_cast<int>(200 * u(rng)), 4.0);
+    const PointList pts = testing::randomPoints(rng, 20 + static_cast<int>(200 * u(rng)), 4.0);
     auto problem = SearchProblem::create(chunks, pts, w);
     ASSERT_TRUE(problem.ok()) << problem.error();
     ASSERT_EQ(problem->topLayer(), 2);
@@ -129,7 +122,7 @@ TEST(GridSearch, BranchAndBoundEqualsExhaustiveWhenTheTopLayerIsCapped) {
 
 TEST(GridSearch, TiesResolveIdenticallyOnAUniformMap) {
   // Every cell holds the same mixture: all translations of a heading tie exactly.
-  MapGeometry g = geometry();
+  MapGeometry g = testing::randomMapGeometry();
   GmmMap map(g);
   for (int ty = -2; ty < 2; ++ty) {
     for (int tx = -2; tx < 2; ++tx) {
@@ -141,7 +134,7 @@ TEST(GridSearch, TiesResolveIdenticallyOnAUniformMap) {
   RasterOptions o;
   o.chunk_shift = 5;
   o.num_layers = 4;
-  const ChunkMap chunks = rasterize(map, o);
+  const ChunkMap chunks = testing::rasterizeRandomMap(map, o);
   std::mt19937 rng(9);
   for (int c = 0; c < 40; ++c) {
     Pose6 prior;
@@ -160,7 +153,7 @@ TEST(GridSearch, TiesResolveIdenticallyOnAUniformMap) {
 }
 
 TEST(GridSearch, OffMapScanIsRejectedWithReason) {
-  const GmmMap map = testing::randomMap(5, geometry(), 0, 0, 1, 1);
+  const GmmMap map = testing::randomMap(5, testing::randomMapGeometry(), 0, 0, 1, 1);
   RasterOptions o;
   o.chunk_shift = 5;
   o.num_layers = 3;
@@ -169,7 +162,7 @@ TEST(GridSearch, OffMapScanIsRejectedWithReason) {
   Pose6 far;
   far.x = 5000.0;
   std::mt19937 rng(1);
-  auto problem = SearchProblem::create(chunks, randomPoints(rng, 50, 3.0),
+  auto problem = SearchProblem::create(chunks, testing::randomPoints(rng, 50, 3.0),
                                        SearchWindow::fromExtent(far, 2.0, 2.0, 0.0, 0.01, 0.2));
   ASSERT_FALSE(problem.ok());
   EXPECT_NE(problem.error().find("off the map"), std::string::npos) << problem.error();

@@ -14,6 +14,7 @@
 #include "gmm_localization/core/matching/registration.h"
 #include "gmm_localization/core/raster/rasterizer.h"
 #include "support/corridor_map.h"
+#include "support/random_chunk_map.h"
 #include "support/random_map.h"
 #include "support/street_map.h"
 #include "support/synthetic_world.h"
@@ -66,15 +67,6 @@ Reference bruteForce(const SearchProblem& p, const SearchOutcome& opt,
   return r;
 }
 
-MapGeometry randomGeometry() {
-  MapGeometry g;
-  g.resolution_m = 0.2;
-  g.tile_size_cells = 40;
-  g.origin_x_m = -4.1;
-  g.origin_y_m = 2.3;
-  return g;
-}
-
 RasterOptions randomRasterOptions() {
   RasterOptions ro;
   ro.chunk_shift = 5;
@@ -82,18 +74,10 @@ RasterOptions randomRasterOptions() {
   return ro;
 }
 
-ChunkMap rasterizeRandom(const GmmMap& map, const RasterOptions& ro) {
-  ChunkMap chunks(map.geometry(), ro);
-  for (int cy = -4; cy <= 3; ++cy) {
-    for (int cx = -4; cx <= 3; ++cx) chunks.insert(rasterizeChunk(map, {cx, cy}, ro).value());
-  }
-  return chunks;
-}
-
 TEST(MatchCertificate, EqualsBruteForceOnRandomCases) {
-  const GmmMap map = testing::randomMap(11, randomGeometry(), -2, -2, 4, 4, 0.35);
+  const GmmMap map = testing::randomMap(11, testing::randomMapGeometry(), -2, -2, 4, 4, 0.35);
   const RasterOptions ro = randomRasterOptions();
-  const ChunkMap chunks = rasterizeRandom(map, ro);
+  const ChunkMap chunks = testing::rasterizeRandomMap(map, ro);
   std::mt19937 rng(31);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   int certified = 0, ambiguous = 0, edge = 0, exact_separation = 0;
@@ -162,9 +146,9 @@ TEST(MatchCertificate, EqualsBruteForceOnRandomCases) {
 }
 
 TEST(MatchCertificate, ABudgetTooSmallNeverCertifiesWhatBruteForceRejects) {
-  const GmmMap map = testing::randomMap(12, randomGeometry(), -2, -2, 4, 4, 0.35);
+  const GmmMap map = testing::randomMap(12, testing::randomMapGeometry(), -2, -2, 4, 4, 0.35);
   const RasterOptions ro = randomRasterOptions();
-  const ChunkMap chunks = rasterizeRandom(map, ro);
+  const ChunkMap chunks = testing::rasterizeRandomMap(map, ro);
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   int budget = 0;
@@ -196,7 +180,7 @@ TEST(MatchCertificate, ABudgetTooSmallNeverCertifiesWhatBruteForceRejects) {
 }
 
 TEST(MatchCertificate, DisabledReportsDisabled) {
-  const GmmMap map = testing::randomMap(13, randomGeometry(), 0, 0, 1, 1);
+  const GmmMap map = testing::randomMap(13, testing::randomMapGeometry(), 0, 0, 1, 1);
   RasterOptions ro;
   ro.chunk_shift = 5;
   ro.num_layers = 3;

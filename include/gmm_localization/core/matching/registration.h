@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "gmm_localization/core/common/result.h"
+#include "gmm_localization/core/matching/global_search.h"
 #include "gmm_localization/core/matching/grid_search.h"
 #include "gmm_localization/core/matching/hill_climb.h"
 #include "gmm_localization/core/matching/match_certificate.h"
@@ -28,6 +29,11 @@ struct RegistrationOptions {
   double z_search_m = 1.0;  ///< height pre-alignment range +- around the prior [m]; 0: off
   bool exhaustive = false;  ///< Algorithm 2 instead of branch-and-bound (reference, slow)
   BranchAndBoundOptions branch_and_bound;
+  /// Windows with at least this many headings (121: wider than +-30 deg at the 0.5 deg step,
+  /// e.g. a full turn for global localization) are searched by branch-and-bound over heading
+  /// intervals (global_search.h), the others by branchAndBoundSearch. Same optimum either way.
+  int interval_search_min_headings = 121;
+  GlobalSearchOptions global;  ///< the interval search's options (its node budget included)
   HillClimbOptions hill_climb;
   CovarianceOptions covariance;
   CertificateOptions certificate;  ///< what the search proves about the rest of its window
@@ -100,6 +106,7 @@ enum class RegistrationError {
   kOffMap,          ///< no rasterized map chunk under the scan anywhere in the search window
   kLowCoverage,     ///< too little of the scan over mapped cells at the best pose
   kNumerical,       ///< non-finite pose or covariance
+  kSearchBudget,    ///< the interval search reached GlobalSearchOptions::max_evaluations
 };
 const char* registrationErrorName(RegistrationError kind);  ///< "no_points", "off_map", ...
 
@@ -141,6 +148,11 @@ class Registration {
   /// searches on one prepared problem). Same failures as match().
   RegistrationResult<PreparedSearch> prepare(const ChunkMap& map, const PointList& base_points,
                                              const MatchRequest& request) const;
+  /// The search stage of match(): exhaustive (options().exhaustive), over heading intervals
+  /// (windows of interval_search_min_headings headings or more) or branchAndBoundSearch.
+  /// `complete` is false only when the interval search stopped at its node budget.
+  SearchOutcome search(const SearchProblem& problem, std::vector<TraversalNode>* traversal,
+                       bool* complete = nullptr) const;
   /// Refinement, covariance, coverage check and obstacles after a search of `prepared`.
   RegistrationResult<MatchResult> finish(const ChunkMap& map, const PointList& base_points,
                                          const MatchRequest& request, PreparedSearch prepared,

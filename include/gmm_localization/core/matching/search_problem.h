@@ -66,6 +66,22 @@ class RasterWindow {
     if (c == nullptr) return 0;
     return c->value(layer, zb, static_cast<int>(gx & mask_), static_cast<int>(gy & mask_));
   }
+  /// An upper bound of layer `layer`'s block starting at (gx, gy) (a node's bound): the stored
+  /// value when that cell's chunk is loaded. When it is not, the block (2^layer cells, at most a
+  /// chunk) may still reach into loaded neighbours, whose parts are bounded by the layer's
+  /// values at their first cells; parts in chunks that are not loaded read the floor (0) at the
+  /// base layer too. Equals value() at layer 0 and wherever the chunk is loaded.
+  uint8_t blockBound(int layer, int64_t gx, int64_t gy, int32_t zb) const {
+    const MapChunk* c = chunk(gx, gy);
+    if (c != nullptr) {
+      return c->value(layer, zb, static_cast<int>(gx & mask_), static_cast<int>(gy & mask_));
+    }
+    return layer == 0 ? 0 : neighbourBound(layer, gx, gy, int64_t{1} << layer, zb);
+  }
+  /// The parts of block [gx, gx + size) x [gy, gy + size) (size at most a chunk, the chunk of
+  /// (gx, gy) not loaded) in the next chunks towards +x and +y, bounded by `layer`'s values at
+  /// their first cells (which cover 2^layer >= size cells each).
+  uint8_t neighbourBound(int layer, int64_t gx, int64_t gy, int64_t size, int32_t zb) const;
   int shift() const { return shift_; }
   size_t chunksPresent() const;
 

@@ -1,0 +1,200 @@
+// The global branch-and-bound over heading intervals equals the exhaustive search (pose and
+// score, ties included) on seeded random cases over the full turn, also with chunks missing and
+// root blocks coarser than the map's coarsest layer; and every interval bound is at least the
+// best leaf below it (brute force).
+
+#include "gmm_localization/core/matching/global_search.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "support/random_chunk_map.h"
+#include "support/random_map.h"
+
+namespace gmm_localization {
+namespace {
+
+/// A full-turn window (heading step 0.1 rad: 63 headings) of half extent 0.6-2.2 m around a
+/// random prior in [-xy, xy]^2.
+SearchWindow fullTurnWindow(std::mt19937& rng, double xy) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Pose6 prior;
+  prior.x = -xy + 2.0 * xy * u(rng);
+  prior.y = -xy + 2.0 * xy * u(rng);
+  prior.z = u(rng);
+  prior.yaw = 6.28 * u(rng);
+  return SearchWindow::fromExtent(prior, 0.6 + 1.6 * u(rng), 0.6 + 1.6 * u(rng), 3.1416, 0.1, 0.2);
+}
+
+void expectSame(const SearchOutcome& ex, const GlobalSearchOutcome& g, int c) {
+  EXPECT_TRUE(g.complete) << "case " << c;
+  EXPECT_EQ(ex.score, g.best.score) << "case " << c;
+  EXPECT_EQ(ex.heading_index, g.best.heading_index) << "case " << c;
+  EXPECT_EQ(ex.tx, g.best.tx) << "case " << c;
+  EXPECT_EQ(ex.ty, g.best.ty) << "case " << c;
+}
+
+TEST(GlobalSearch, EqualsExhaustiveOverTheFullTurnOnRandomCases) {
+  int cases = 0;
+  for (int coarsen : {0, 2}) {
+    // Also a map of isolated cells with a few far points: optima then hinge on a swing.
+    const bool sparse = coarsen == 0;
+    const GmmMap map =
+        testing::randomMap(7, testing::randomMapGeometry(), -2, -2, 4, 4, sparse ? 0.97 : 0.8);
+    RasterOptions o;
+    o.chunk_shift = 5;
+    o.num_layers = 4;
+    o.z_coarsening_period = coarsen;
+    const ChunkMap full = testing::rasterizeRandomMap(map, o);
+    std::mt19937 rng(300 + coarsen);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (int c = 0; c < 30; ++c, ++cases) {
+      const ChunkMap chunks = testing::withoutSomeChunks(full, 40 + c, c % 3 == 0 ? 0.3 : 0.0);
+      const SearchWindow w = fullTurnWindow(rng, 10.0);
+      const PointList pts =
+          sparse ? testing::randomPoints(rng, 1 + static_cast<int>(4 * u(rng)), 7.0)
+                 : testing::randomPoints(rng, 20 + static_cast<int>(200 * u(rng)), 5.0);
+      auto problem = SearchProblem::create(chunks, pts, w);
+      if (!problem.ok()) continue;  // every chunk under this window dropped
+      const SearchOutcome ex = exhaustiveSearch(problem.value());
+      GlobalSearchOptions go;
+      go.root_heading_levels = c % 6;
+      go.root_layer = c % 4 == 1 ? 6 : -1;  // 6 > num_layers: several reads per point
+      go.prior_as_incumbent = (c % 2) == 0;
+      go.heading_split_share = c % 5 == 0 ? 4.0 : 0.5;
+      expectSame(ex, globalBranchAndBound(problem.value(), go), c);
+    }
+  }
+  EXPECT_GE(cases, 40);
+}
+
+TEST(GlobalSearch, IntervalBoundIsAtLeastEveryLeafBelowIt) {
+  // A sparse map (92% empty cells), so that a bound missing part of a point's reach shows.
+  const GmmMap map = testing::randomMap(11, testing::randomMapGeometry(), -2, -2, 4, 4, 0.92);
+  RasterOptions o;
+  o.chunk_shift = 5;
+  o.num_layers = 4;
+  o.z_coarsening_period = 0;
+  const ChunkMap full = testing::rasterizeRandomMap(map, o);
+  std::mt19937 rng(77);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int64_t nodes = 0, tight = 0;
+  for (int c = 0; c < 40; ++c) {
+    const ChunkMap chunks = testing::withoutSomeChunks(full, 90 + c, c % 2 == 0 ? 0.25 : 0.0);
+    const SearchWindow w = fullTurnWindow(rng, 10.0);
+    const PointList pts = testing::randomPoints(rng, 30 + static_cast<int>(150 * u(rng)), 6.0);
+    auto created = SearchProblem::create(chunks, pts, w);
+    if (!created.ok()) continue;
+    const SearchProblem& problem = created.value();
+    for (int k = 0; k < 25; ++k, ++nodes) {
+      // Mostly short intervals over small blocks (the dilation decides), some translation-only
+      // blocks coarser than the map's layers (several reads per point).
+      const bool coarse = k % 5 == 0;
+      const int hl = coarse ? 0 : 1 + static_cast<int>(u(rng) * 3.0);
+      const int layer = coarse ? 5 : static_cast<int>(u(rng) * 3.0);
+      const int j0 = static_cast<int>(u(rng) * w.sizeH());
+      const int tx = static_cast<int>(u(rng) * w.sizeX());
+      const int ty = static_cast<int>(u(rng) * w.sizeY());
+      int64_t best = 0;
+      for (int j = j0; j < std::min(j0 + (1 << hl), w.sizeH()); ++j) {
+        for (int y = ty; y < std::min(ty + (1 << layer), w.sizeY()); ++y) {
+          for (int x = tx; x < std::min(tx + (1 << layer), w.sizeX()); ++x) {
+            best = std::max(best, problem.score(j, 0, x, y));
+          }
+        }
+      }
+      const int64_t b = headingIntervalBound(problem, j0, hl, layer, tx, ty);
+      ASSERT_GE(b, best) << "case " << c << " node " << k << " hl " << hl << " layer " << layer;
+      if (b == best) ++tight;
+    }
+  }
+  EXPECT_GE(nodes, 800);
+  EXPECT_LT(tight, nodes);  // not the exact max everywhere, or the test could not fail
+}
+
+TEST(GlobalSearch, IntervalBoundCoversTheReachOfAFarPoint) {
+  // One point 4-7 m out over a map of isolated cells (97% empty): the best leaf of a heading
+  // interval is the one that swings the point onto a mapped cell, often far from where the
+  // middle heading puts it, so a bound that under-estimates the swing fails here.
+  const GmmMap map = testing::randomMap(13, testing::randomMapGeometry(), -2, -2, 4, 4, 0.97);
+  RasterOptions o;
+  o.chunk_shift = 5;
+  o.num_layers = 4;
+  o.z_coarsening_period = 0;
+  const ChunkMap chunks = testing::rasterizeRandomMap(map, o);
+  std::mt19937 rng(19);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int64_t nodes = 0, scoring = 0;
+  for (int c = 0; c < 200; ++c) {
+    const double r = 4.0 + 3.0 * u(rng), a = 6.28 * u(rng);
+    const PointList pts = {Eigen::Vector3f(static_cast<float>(r * std::cos(a)),
+                                           static_cast<float>(r * std::sin(a)),
+                                           static_cast<float>(-1.0 + 3.0 * u(rng)))};
+    const SearchWindow w = fullTurnWindow(rng, 10.0);
+    auto created = SearchProblem::create(chunks, pts, w);
+    if (!created.ok()) continue;
+    const SearchProblem& problem = created.value();
+    for (int k = 0; k < 10; ++k, ++nodes) {
+      const int hl = 1 + static_cast<int>(u(rng) * 3.0);
+      const int layer = static_cast<int>(u(rng) * 2.0);
+      const int j0 = static_cast<int>(u(rng) * w.sizeH());
+      const int tx = static_cast<int>(u(rng) * w.sizeX());
+      const int ty = static_cast<int>(u(rng) * w.sizeY());
+      int64_t best = 0;
+      for (int j = j0; j < std::min(j0 + (1 << hl), w.sizeH()); ++j) {
+        for (int y = ty; y < std::min(ty + (1 << layer), w.sizeY()); ++y) {
+          for (int x = tx; x < std::min(tx + (1 << layer), w.sizeX()); ++x) {
+            best = std::max(best, problem.score(j, 0, x, y));
+          }
+        }
+      }
+      if (best > 0) ++scoring;
+      ASSERT_GE(headingIntervalBound(problem, j0, hl, layer, tx, ty), best)
+          << "case " << c << " node " << k << " hl " << hl << " layer " << layer;
+    }
+  }
+  EXPECT_GE(scoring, 150);  // enough nodes whose leaves reach a mapped cell
+  EXPECT_GE(nodes, 1500);
+}
+
+TEST(GlobalSearch, LeafBoundIsTheExactScore) {
+  const GmmMap map = testing::randomMap(3, testing::randomMapGeometry(), -2, -2, 4, 4, 0.3);
+  RasterOptions o;
+  o.chunk_shift = 5;
+  o.num_layers = 4;
+  const ChunkMap chunks = testing::rasterizeRandomMap(map, o);
+  std::mt19937 rng(5);
+  const SearchWindow w = fullTurnWindow(rng, 6.0);
+  auto problem = SearchProblem::create(chunks, testing::randomPoints(rng, 120, 5.0), w);
+  ASSERT_TRUE(problem.ok()) << problem.error();
+  for (int j = 0; j < w.sizeH(); j += 7) {
+    EXPECT_EQ(headingIntervalBound(problem.value(), j, 0, 0, 3, 2),
+              problem.value().score(j, 0, 3, 2));
+  }
+}
+
+TEST(GlobalSearch, BudgetStopsWithoutClaimingAnOptimum) {
+  const GmmMap map = testing::randomMap(9, testing::randomMapGeometry(), -2, -2, 4, 4, 0.3);
+  RasterOptions o;
+  o.chunk_shift = 5;
+  o.num_layers = 4;
+  const ChunkMap chunks = testing::rasterizeRandomMap(map, o);
+  std::mt19937 rng(8);
+  const SearchWindow w = fullTurnWindow(rng, 6.0);
+  auto problem = SearchProblem::create(chunks, testing::randomPoints(rng, 150, 5.0), w);
+  ASSERT_TRUE(problem.ok()) << problem.error();
+  GlobalSearchOptions go;
+  go.max_evaluations = 5;
+  const GlobalSearchOutcome g = globalBranchAndBound(problem.value(), go);
+  EXPECT_FALSE(g.complete);
+  EXPECT_EQ(g.best.heading_index, w.half_h);  // the prior, reported as such
+  EXPECT_TRUE(go.validate().empty());
+  go.root_heading_levels = 40;
+  EXPECT_FALSE(go.validate().empty());
+}
+
+}  // namespace
+}  // namespace gmm_localization
