@@ -101,6 +101,8 @@ void Matcher::setupDiagnostics() {
     s.add("dropped scans (total)", dropped_total);
     s.add("malformed or empty clouds", bad_clouds_);
     s.add("time went backwards (resets)", time_resets_);
+    s.add("time went backwards (recovered from the match history)", time_recalls_);
+    s.add("scan processing failures (answered)", processing_failures_);
     s.add("prior mode", last_mode_);
     s.add("prior source", last_prior_source_);
     s.add("last reason", last_reason_);

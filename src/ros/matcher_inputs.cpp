@@ -51,13 +51,21 @@ void Matcher::onInitialPose(const geometry_msgs::PoseWithCovarianceStamped::Cons
   const double stamp = msg->header.stamp.isZero() ? NAN : pose->stamp_s;
   bool z_known = false;
   Pose6 full;
+  // The message's (x, y, yaw) covariance: a coarse fix (large sigma) widens the search up to
+  // the global window.
+  const auto& c = msg->pose.covariance;
+  Eigen::Matrix3d cov_xyh;
+  cov_xyh << c[0], c[1], c[5], c[6], c[7], c[11], c[30], c[31], c[35];
+  WindowExtent window;
   {
     std::lock_guard<std::mutex> lock(session_mutex_);
-    full = session_.setInitialPose(pose->pose, stamp, /*z_known=*/false, &z_known);
+    full =
+        session_.setInitialPose(pose->pose, stamp, /*z_known=*/false, &z_known, &cov_xyh, &window);
   }
-  ROS_INFO("%s: initial pose x %.2f y %.2f yaw %.3f (z %.2f %s): searching the wide window",
+  ROS_INFO("%s: initial pose x %.2f y %.2f yaw %.3f (z %.2f %s): searching +-%.1f m, +-%.0f deg",
            name_.c_str(), full.x, full.y, full.yaw, full.z,
-           z_known ? "from the posterior" : "unknown");
+           z_known ? "from the posterior" : "unknown", window.half_x_m,
+           window.half_heading_rad * 180.0 / M_PI);
 }
 
 void Matcher::onChunk(const ros::MessageEvent<const RasterChunk>& event) {

@@ -1,4 +1,5 @@
 #include "gmm_localization/ros/matcher_options.h"
+#include <cmath>
 
 #include "gmm_localization/ros/params.h"
 
@@ -58,6 +59,14 @@ RegistrationOptions loadRegistrationOptions(const ParamSource& parent) {
                                         ce.separation_depth_per_point, 0.0, 100.0);
   ce.max_evaluations = static_cast<int64_t>(
       param(nh, "certificate/max_evaluations", static_cast<int>(ce.max_evaluations), 1, 100000000));
+  o.interval_search_min_headings =
+      param(nh, "interval_search_min_headings", o.interval_search_min_headings, 1, 100000);
+  GlobalSearchOptions& g = o.global;
+  g.root_heading_levels = param(nh, "global/root_heading_levels", g.root_heading_levels, 0, 11);
+  g.max_points = static_cast<size_t>(
+      param(nh, "global/max_points", static_cast<int>(g.max_points), 0, 1000000));
+  g.max_evaluations = static_cast<int64_t>(
+      param(nh, "global/max_evaluations", static_cast<int>(g.max_evaluations), 0, 1000000000));
   o.classify_obstacles = param(nh, "classify_obstacles", o.classify_obstacles);
   o.obstacles.mahalanobis_threshold =
       param(nh, "obstacles/mahalanobis_threshold", o.obstacles.mahalanobis_threshold, 0.0, 1000.0);
@@ -80,6 +89,10 @@ LocalizationPolicyOptions loadLocalizationPolicyOptions(const ParamSource& nh) {
   w.wide_half_heading_rad =
       param(nh, "window/wide_half_heading_rad", w.wide_half_heading_rad, 0.0, 1.6);
   w.unknown_z_search_m = param(nh, "window/unknown_z_search_m", w.unknown_z_search_m, 0.0, 20.0);
+  w.global_max_half_xy_m =
+      param(nh, "window/global_max_half_xy_m", w.global_max_half_xy_m, 0.2, 100.0);
+  w.global_max_half_heading_rad =
+      param(nh, "window/global_max_half_heading_rad", w.global_max_half_heading_rad, 0.0, M_PI);
   AcceptancePolicyOptions& a = o.acceptance;
   a.min_log_likelihood_per_point = param(nh, "acceptance/min_log_likelihood_per_point",
                                          a.min_log_likelihood_per_point, -100.0, 10.0);
@@ -115,6 +128,8 @@ LocalizationPolicyOptions loadLocalizationPolicyOptions(const ParamSource& nh) {
                                             r.previous_match_sigma_growth_mps, 0.0, 100.0);
   r.max_stale_prior_age_s =
       param(nh, "relocalization/max_stale_prior_age_s", r.max_stale_prior_age_s, 0.0, 1e6);
+  r.match_history_s = param(nh, "relocalization/match_history_s", r.match_history_s, 0.0, 86400.0);
+  r.recall_max_gap_s = param(nh, "relocalization/recall_max_gap_s", r.recall_max_gap_s, 0.0, 10.0);
   requireValid("localization policy options", o.validate());
   return o;
 }

@@ -18,18 +18,24 @@ void Matcher::onScan(const sensor_msgs::PointCloud2::ConstPtr& msg) {
   // Time going backwards (a looping bag): the session forgets the state of the other timeline
   // and drops the waiting scans of the old timeline.
   MatcherSession::Arrival arrival;
+  bool recalled = false;
   {
     std::lock_guard<std::mutex> lock(session_mutex_);
     arrival = session_.onScanArrival(msg->header.stamp.toSec());
+    recalled = session_.lastResetRecalled();
   }
   if (arrival.timeWentBackwards()) {
     {
       std::lock_guard<std::mutex> lock(stats_mutex_);
       ++time_resets_;
+      time_recalls_ += recalled ? 1 : 0;
     }
-    char reason[160];
+    char reason[200];
     std::snprintf(reason, sizeof(reason),
-                  "time went backwards by %.3f s: matcher state cleared, waiting for a prior",
+                  recalled ? "time went backwards by %.3f s: matcher state cleared, searching "
+                             "around the match remembered at this stamp"
+                           : "time went backwards by %.3f s: matcher state cleared, waiting for "
+                             "a prior",
                   arrival.backwards_jump_s);
     ROS_WARN("%s: %s", name_.c_str(), reason);
     publishSkipped(msg->header.stamp, reason, 0);
@@ -58,8 +64,26 @@ void Matcher::workerLoop() {
     try {
       processScan(msg, dropped);
     } catch (const std::exception& e) {
+      // Answered all the same: a status names the failure (and the scan counts as processed).
       ROS_ERROR_THROTTLE(5.0, "%s: scan processing failed: %s", name_.c_str(), e.what());
+      publishFailure(msg, std::string("scan processing failed: ") + e.what(), dropped);
+    } catch (...) {
+      ROS_ERROR_THROTTLE(5.0, "%s: scan processing failed (unknown exception)", name_.c_str());
+      publishFailure(msg, "scan processing failed: unknown exception", dropped);
     }
+  }
+}
+
+void Matcher::publishFailure(const sensor_msgs::PointCloud2::ConstPtr& msg,
+                             const std::string& reason, uint32_t dropped) {
+  try {
+    {
+      std::lock_guard<std::mutex> lock(stats_mutex_);
+      ++processing_failures_;
+    }
+    publishSkipped(msg ? msg->header.stamp : ros::Time(), reason, dropped);
+  } catch (...) {
+    // Publishing itself failed (shutdown): nothing more can be said.
   }
 }
 

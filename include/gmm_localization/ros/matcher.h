@@ -84,6 +84,9 @@ class Matcher {
   void processScan(const sensor_msgs::PointCloud2::ConstPtr& msg, uint32_t dropped);
   bool scanToBase(const sensor_msgs::PointCloud2& msg, ScanInput* scan, std::string* reason);
   void publishSkipped(const ros::Time& stamp, const std::string& reason, uint32_t dropped);
+  /// The status of a scan whose processing threw (counted in the diagnostics).
+  void publishFailure(const sensor_msgs::PointCloud2::ConstPtr& msg, const std::string& reason,
+                      uint32_t dropped);
   void publishOutputs(const MatchReport& report, const ros::Time& stamp, uint32_t dropped);
   // matcher_diagnostics.cpp
   void setupDiagnostics();
@@ -123,6 +126,8 @@ class Matcher {
   std::string last_certificate_;
   double last_protection_xy_m_ = 0.0, last_separation_ = 0.0;
   uint64_t scans_ = 0, accepted_ = 0, time_resets_ = 0, bad_clouds_ = 0;
+  uint64_t time_recalls_ = 0;         ///< resets recovered from the match history
+  uint64_t processing_failures_ = 0;  ///< scans whose processing threw (answered all the same)
   std::string last_reason_;
   double last_ll_per_point_ = 0.0, last_search_ms_ = 0.0, last_total_ms_ = 0.0;
   WindowExtent last_window_;

@@ -41,15 +41,18 @@ std::string formatted(const char* what, double value, const char* relation, doub
 }  // namespace
 
 std::string WindowPolicyOptions::validate() const {
-  std::string e =
-      firstError(rangeProblem("window.sigma_multiplier", sigma_multiplier, 0.5, 10.0),
-                 rangeProblem("window.min_half_xy_m", min_half_xy_m, 0.2, 100.0),
-                 rangeProblem("window.max_half_xy_m", max_half_xy_m, 0.2, 100.0),
-                 rangeProblem("window.min_half_heading_rad", min_half_heading_rad, 0.0, 1.6),
-                 rangeProblem("window.max_half_heading_rad", max_half_heading_rad, 0.0, 1.6),
-                 rangeProblem("window.wide_half_xy_m", wide_half_xy_m, 0.2, 100.0),
-                 rangeProblem("window.wide_half_heading_rad", wide_half_heading_rad, 0.0, 1.6),
-                 rangeProblem("window.unknown_z_search_m", unknown_z_search_m, 0.0, 20.0));
+  std::string e = firstError(
+      rangeProblem("window.sigma_multiplier", sigma_multiplier, 0.5, 10.0),
+      rangeProblem("window.min_half_xy_m", min_half_xy_m, 0.2, 100.0),
+      rangeProblem("window.max_half_xy_m", max_half_xy_m, 0.2, 100.0),
+      rangeProblem("window.min_half_heading_rad", min_half_heading_rad, 0.0, 1.6),
+      rangeProblem("window.max_half_heading_rad", max_half_heading_rad, 0.0, 1.6),
+      rangeProblem("window.wide_half_xy_m", wide_half_xy_m, 0.2, 100.0),
+      rangeProblem("window.wide_half_heading_rad", wide_half_heading_rad, 0.0, 1.6),
+      rangeProblem("window.global_max_half_xy_m", global_max_half_xy_m, wide_half_xy_m, 100.0),
+      rangeProblem("window.global_max_half_heading_rad", global_max_half_heading_rad,
+                   wide_half_heading_rad, M_PI),
+      rangeProblem("window.unknown_z_search_m", unknown_z_search_m, 0.0, 20.0));
   if (!e.empty()) return e;
   if (min_half_xy_m > max_half_xy_m) return "window.min_half_xy_m must be <= max_half_xy_m";
   if (min_half_heading_rad > max_half_heading_rad) {
@@ -88,7 +91,9 @@ std::string RelocalizationPolicyOptions::validate() const {
       rangeProblem("relocalization.max_previous_match_age_s", max_previous_match_age_s, 0.0, 600.0),
       rangeProblem("relocalization.previous_match_sigma_growth_mps",
                    previous_match_sigma_growth_mps, 0.0, 100.0),
-      rangeProblem("relocalization.max_stale_prior_age_s", max_stale_prior_age_s, 0.0, 1e6));
+      rangeProblem("relocalization.max_stale_prior_age_s", max_stale_prior_age_s, 0.0, 1e6),
+      rangeProblem("relocalization.match_history_s", match_history_s, 0.0, 86400.0),
+      rangeProblem("relocalization.recall_max_gap_s", recall_max_gap_s, 0.0, 10.0));
 }
 
 std::string LocalizationPolicyOptions::validate() const {
@@ -126,6 +131,25 @@ WindowExtent searchWindowFor(const Prior& prior, const WindowPolicyOptions& o) {
   w.half_y_m = clampSigma(k * sigmaOf(c(1, 1)), o.min_half_xy_m, o.max_half_xy_m);
   w.half_heading_rad =
       clampSigma(k * sigmaOf(c(2, 2)), o.min_half_heading_rad, o.max_half_heading_rad);
+  return w;
+}
+
+std::optional<WindowExtent> explicitPoseWindow(const Eigen::Matrix3d& c,
+                                               const WindowPolicyOptions& o) {
+  const double vx = c(0, 0), vy = c(1, 1), vh = c(2, 2);
+  if (!(std::isfinite(vx) && std::isfinite(vy) && std::isfinite(vh) && vx >= 0.0 && vy >= 0.0 &&
+        vh >= 0.0)) {
+    return std::nullopt;
+  }
+  const double k = o.sigma_multiplier;
+  const double xy = k * std::sqrt(std::max(vx, vy)), h = k * std::sqrt(vh);
+  // rviz sends 3 sigma = 45 deg with every "2D Pose Estimate": only a heading said to be unknown
+  // (3 sigma of 90 deg or more) widens the heading range.
+  const bool heading_unknown = h >= 0.5 * M_PI;
+  if (xy <= o.wide_half_xy_m && !heading_unknown) return std::nullopt;
+  WindowExtent w;
+  w.half_x_m = w.half_y_m = std::clamp(xy, o.wide_half_xy_m, o.global_max_half_xy_m);
+  w.half_heading_rad = heading_unknown ? o.global_max_half_heading_rad : o.wide_half_heading_rad;
   return w;
 }
 

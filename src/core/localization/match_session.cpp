@@ -37,6 +37,7 @@ std::optional<BodyTwist> deskewTwist(const ScanInput& scan, const OdometryBuffer
 MatchSessionState::MatchSessionState(const MatchSessionOptions& options,
                                      const LocalizationPolicyOptions& policy)
     : options_(options),
+      window_policy_(policy.window),
       tracker_(policy),
       odometry_(options.odometry_buffer_s, options.odometry_max_extrapolation_s,
                 options.time_backwards_tolerance_s) {}
@@ -59,10 +60,22 @@ void MatchSessionState::setConfiguredPose(const Pose6& pose, bool z_known,
 }
 
 Pose6 MatchSessionState::setInitialPose(const Pose6& pose, double stamp_s, bool z_known,
-                                        bool* searched_z_known) {
+                                        bool* searched_z_known,
+                                        const Eigen::Matrix3d* covariance_xyh,
+                                        WindowExtent* window_out) {
   bool completed_z = z_known;
   const Pose6 full = z_known ? pose : tracker_.completePlanarPose(pose, &odometry_, &completed_z);
-  tracker_.setExplicitPose(full, stamp_s, PriorSource::kInitialPose, completed_z);
+  const std::optional<WindowExtent> coarse =
+      covariance_xyh != nullptr ? explicitPoseWindow(*covariance_xyh, window_policy_)
+                                : std::nullopt;
+  tracker_.setExplicitPose(full, stamp_s, PriorSource::kInitialPose, completed_z,
+                           coarse ? &*coarse : nullptr);
+  if (window_out != nullptr) {
+    *window_out = coarse
+                      ? *coarse
+                      : WindowExtent{window_policy_.wide_half_xy_m, window_policy_.wide_half_xy_m,
+                                     window_policy_.wide_half_heading_rad};
+  }
   if (searched_z_known != nullptr) *searched_z_known = completed_z;
   return full;
 }
@@ -102,7 +115,10 @@ double MatchSessionState::checkScanStamp(double stamp_s) {
     tracker_.reset();
     ++epoch_;
     ++resets_;
-    if (options_.configured_pose_on_reset) armConfiguredPose();
+    // The other timeline's matches at this stamp, if remembered, else the configured pose.
+    last_reset_recalled_ = tracker_.recallAt(stamp_s);
+    if (last_reset_recalled_) ++recalls_;
+    if (!last_reset_recalled_ && options_.configured_pose_on_reset) armConfiguredPose();
   }
   have_last_scan_ = true;
   last_scan_stamp_s_ = stamp_s;

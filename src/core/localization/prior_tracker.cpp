@@ -242,6 +242,17 @@ void PriorTracker::onAccepted(double stamp_s, const Pose6& pose,
   has_match_ = true;
   match_ = Estimate{stamp_s, toIsometry(pose), covariance_xyh, BodyTwist()};
   if (has_posterior_) match_.twist = posterior_.twist;
+  const double keep_s = options_.relocalization.match_history_s;
+  if (keep_s > 0.0 && std::isfinite(stamp_s)) {
+    history_.push_back(match_);
+    // Bounded by time span and by count (10 Hz for keep_s), whatever the stamps do.
+    const size_t cap = static_cast<size_t>(std::min(1e6, 10.0 * keep_s)) + 1;
+    while (history_.size() > cap ||
+           (!history_.empty() && history_.front().stamp_s < stamp_s - keep_s &&
+            history_.front().stamp_s <= history_.back().stamp_s)) {
+      history_.pop_front();
+    }
+  }
   consecutive_rejections_ = 0;
   if (has_explicit_ && used.explicit_generation != explicit_generation_) return;
   has_explicit_ = false;
@@ -253,6 +264,20 @@ void PriorTracker::onRejected() {
   if (consecutive_rejections_ >= options_.relocalization.max_consecutive_rejections) {
     relocalizing_ = true;
   }
+}
+
+bool PriorTracker::recallAt(double stamp_s) {
+  const double gap = options_.relocalization.recall_max_gap_s;
+  if (!std::isfinite(stamp_s) || history_.empty() || !(gap > 0.0)) return false;
+  const Estimate* best = nullptr;
+  for (const Estimate& e : history_) {
+    const double d = std::abs(e.stamp_s - stamp_s);
+    if (d <= gap && (best == nullptr || d < std::abs(best->stamp_s - stamp_s))) best = &e;
+  }
+  if (best == nullptr) return false;
+  const Estimate e = *best;
+  setExplicitPose(fromIsometry(e.map_T_base), e.stamp_s, PriorSource::kPreviousMatch, true);
+  return true;
 }
 
 void PriorTracker::reset() {

@@ -281,7 +281,11 @@ TEST_F(LocalizerPipelineTest, RecoversWhenTimeGoesBackwards) {
   EXPECT_EQ(p.resets(), 1u);
   EXPECT_EQ(p.filter().stops(), 1u);
   ASSERT_FALSE(reports.empty());
-  EXPECT_EQ(reports.front().match.prior.source, PriorSource::kConfigured);
+  // The first pass's match at the first scan's stamp centres the wide window (not the
+  // configured pose 2 m off, nor nothing).
+  EXPECT_EQ(reports.front().match.prior.source, PriorSource::kPreviousMatch);
+  EXPECT_TRUE(reports.front().match.prior.wide);
+  EXPECT_NEAR(reports.front().match.prior.pose.x, truth(0.0).x, 0.1);
   int accepted = 0;
   for (const auto& r : reports) {
     if (!r.match.accepted()) continue;
@@ -293,6 +297,23 @@ TEST_F(LocalizerPipelineTest, RecoversWhenTimeGoesBackwards) {
   auto s = p.stateAt(kT0 + kDuration);
   ASSERT_TRUE(s.ok());
   expectNear(fromIsometry(s->pose()), truth(kDuration), 0.1, 0.005, "final EKF state");
+}
+
+TEST_F(LocalizerPipelineTest, WithoutAMatchHistoryTimeGoingBackwardsReArmsTheConfiguredPose) {
+  auto o = options();
+  o.policy.relocalization.match_history_s = 0.0;
+  auto created = LocalizerPipeline::create(o);
+  ASSERT_TRUE(created.ok());
+  LocalizerPipeline& p = created.value();
+  p.setMap(map_);
+  p.setConfiguredPose(offsetPose(truth(0.05), 2.0, 0.0, 0.0), true);
+  drive(p, kT0, 0.2);
+  p.takeReports();
+  drive(p, kT0, 0.2);
+  const auto reports = p.takeReports();
+  EXPECT_EQ(p.resets(), 1u);
+  ASSERT_FALSE(reports.empty());
+  EXPECT_EQ(reports.front().match.prior.source, PriorSource::kConfigured);
 }
 
 TEST_F(LocalizerPipelineTest, ReportsWhyNothingIsSearched) {

@@ -539,3 +539,35 @@ TEST(LocalizationFilter, TimeGoingBackwardsStopsItAndAnInitialPoseRestartsIt) {
 
 }  // namespace
 }  // namespace gmm_localization
+
+namespace gmm_localization {
+namespace {
+
+TEST(ExplicitPoseWindow, OnlyACoarseFixWidensTheSearch) {
+  WindowPolicyOptions o;
+  o.global_max_half_xy_m = 40.0;
+  // rviz's "2D Pose Estimate" covariance (0.5 m, 15 deg): the wide window, as before.
+  EXPECT_FALSE(explicitPoseWindow(Eigen::Vector3d(0.25, 0.25, 0.0685).asDiagonal(), o));
+  // A 10 m fix: 3 sigma in x and y, the wide heading range.
+  auto w = explicitPoseWindow(Eigen::Vector3d(100.0, 25.0, 0.0685).asDiagonal(), o);
+  ASSERT_TRUE(w);
+  EXPECT_DOUBLE_EQ(w->half_x_m, 30.0);
+  EXPECT_DOUBLE_EQ(w->half_y_m, 30.0);
+  EXPECT_DOUBLE_EQ(w->half_heading_rad, o.wide_half_heading_rad);
+  // Heading unknown (3 sigma >= 90 deg) at a precise position: the full turn in the wide window.
+  w = explicitPoseWindow(Eigen::Vector3d(0.25, 0.25, 1.0).asDiagonal(), o);
+  ASSERT_TRUE(w);
+  EXPECT_DOUBLE_EQ(w->half_x_m, o.wide_half_xy_m);
+  EXPECT_DOUBLE_EQ(w->half_heading_rad, M_PI);
+  // Capped, and garbage variances give the wide window.
+  w = explicitPoseWindow(Eigen::Vector3d(1e6, 1e6, 100.0).asDiagonal(), o);
+  ASSERT_TRUE(w);
+  EXPECT_DOUBLE_EQ(w->half_x_m, 40.0);
+  EXPECT_FALSE(explicitPoseWindow(Eigen::Vector3d(NAN, 1.0, 1.0).asDiagonal(), o));
+  EXPECT_FALSE(explicitPoseWindow(Eigen::Vector3d(-1.0, 1.0, 1.0).asDiagonal(), o));
+  o.global_max_half_xy_m = 5.0;  // below the wide window
+  EXPECT_FALSE(o.validate().empty());
+}
+
+}  // namespace
+}  // namespace gmm_localization

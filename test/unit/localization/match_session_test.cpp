@@ -128,6 +128,59 @@ TEST(MatchSession, TimeGoingBackwardsResetsAndReArmsTheConfiguredPose) {
   EXPECT_FALSE(quiet.beginMatch(scanAt(90.0)).prior.valid());
 }
 
+/// Drives `s` from stamp t0 to t1 (10 Hz), every scan accepted at x = 10 m/s * stamp.
+void driveAccepted(Session& s, double t0, double t1) {
+  for (double t = t0; t <= t1 + 1e-9; t += 0.1) {
+    s.arrive(t, 0);
+    s.takeNext();
+    const ScanInput scan = scanAt(t);
+    MatchStart start = s.beginMatch(scan);
+    MatchReport r = acceptedReport(scan, start, 0.0, 0.0);
+    r.pose = poseAt(10.0 * t, 0.0, 0.0);
+    ASSERT_TRUE(s.finishMatch(start.epoch, &r));
+  }
+}
+
+TEST(MatchSession, TimeGoingBackwardsRecallsTheMatchRememberedAtTheNewStamp) {
+  MatchSessionOptions o;
+  o.time_backwards_tolerance_s = 1.0;
+  const Pose6 configured = poseAt(-250.0, 0.0, 0.0);  // the launch's pose, far from the drive
+  {
+    Session s(o, LocalizationPolicyOptions());
+    s.setConfiguredPose(configured, true);
+    driveAccepted(s, 10.0, 30.0);
+    // 17.97 s back (a looping bag): the match of the first pass at 12.0 s centres the search.
+    ASSERT_TRUE(s.arrive(12.03, 1).timeWentBackwards());
+    EXPECT_TRUE(s.lastResetRecalled());
+    EXPECT_EQ(s.recalls(), 1u);
+    s.takeNext();
+    const MatchStart start = s.beginMatch(scanAt(12.03));
+    EXPECT_EQ(start.prior.source, PriorSource::kPreviousMatch);
+    EXPECT_TRUE(start.prior.wide);
+    EXPECT_NEAR(start.prior.pose.x, 120.0, 1e-6);
+    EXPECT_EQ(s.tracker().mode(), PriorMode::kRelocalizing);
+    // Back before anything remembered: the configured pose, as without a history.
+    ASSERT_TRUE(s.arrive(3.0, 2).timeWentBackwards());
+    EXPECT_FALSE(s.lastResetRecalled());
+    EXPECT_EQ(s.recalls(), 1u);
+    s.takeNext();
+    EXPECT_EQ(s.beginMatch(scanAt(3.0)).prior.source, PriorSource::kConfigured);
+  }
+  {
+    // A short history forgets the first pass.
+    LocalizationPolicyOptions policy;
+    policy.relocalization.match_history_s = 1.0;
+    Session s(o, policy);
+    s.setConfiguredPose(configured, true);
+    driveAccepted(s, 10.0, 30.0);
+    EXPECT_LE(s.tracker().historySize(), 11u);
+    ASSERT_TRUE(s.arrive(12.0, 1).timeWentBackwards());
+    EXPECT_FALSE(s.lastResetRecalled());
+    s.takeNext();
+    EXPECT_EQ(s.beginMatch(scanAt(12.0)).prior.source, PriorSource::kConfigured);
+  }
+}
+
 TEST(MatchSession, TheEpochDiscardsAResultBegunBeforeTimeWentBackwards) {
   Session s{MatchSessionOptions(), LocalizationPolicyOptions()};
   s.setConfiguredPose(poseAt(0.0, 0.0, 0.0), true);

@@ -10,7 +10,9 @@
 // (x, y, yaw) are [m^2, m^2, rad^2]; 6x6 covariances are in geometry_msgs order (x, y, z, roll,
 // pitch, yaw).
 
+#include <cmath>
 #include <cstdint>
+#include <optional>
 #include <string>
 
 #include <Eigen/Core>
@@ -35,6 +37,13 @@ struct WindowPolicyOptions {
   /// Height pre-alignment range used instead of RegistrationOptions::z_search_m when the
   /// prior's height is unknown (rviz "2D Pose Estimate" gives z = 0) [m].
   double unknown_z_search_m = 5.0;
+  /// An explicit pose whose covariance says it is coarser than the wide window (sigma_multiplier
+  /// x sigma beyond wide_half_xy_m, or a heading sigma_multiplier x sigma of 90 deg or more) is
+  /// searched over that extent, up to these (a rough fix, heading unknown): global localization
+  /// by the heading-interval search (global_search.h). 12.5 m x 360 deg takes about 1-5 s on
+  /// one core on the simulated town (docs/benchmarks.md); larger regions take far longer.
+  double global_max_half_xy_m = 12.5;         ///< [m]
+  double global_max_half_heading_rad = M_PI;  ///< [rad]
 
   std::string validate() const;
 };
@@ -104,6 +113,12 @@ struct RelocalizationPolicyOptions {
   /// An older estimate (posterior or match) up to this age is still used as the centre of a
   /// wide window (e.g. after the EKF reset on a time jump); beyond it there is "no prior" [s].
   double max_stale_prior_age_s = 30.0;
+  /// Accepted matches remembered by stamp for this long [s] (0: none). When time goes backwards
+  /// (a looping bag, a replay restarted) and a remembered match lies within
+  /// recall_max_gap_s of the new scan stamp, the search restarts around it (wide window)
+  /// instead of waiting for a person or re-arming the configured pose.
+  double match_history_s = 600.0;
+  double recall_max_gap_s = 0.5;
 
   std::string validate() const;
 };
@@ -160,6 +175,13 @@ struct Prior {
 /// prior's standard deviation per axis (x, y in the map frame; yaw), each clamped to [min, max].
 /// Non-finite sigmas give the maximum.
 WindowExtent searchWindowFor(const Prior& prior, const WindowPolicyOptions& options);
+
+/// The window for an explicit pose with (x, y, yaw) covariance `covariance_xyh`: the wide
+/// window (nullopt) unless sigma_multiplier x sigma exceeds wide_half_xy_m (then that extent,
+/// capped by global_max_half_xy_m) or the heading is unknown (then global_max_half_heading_rad).
+/// Non-finite or negative variances: the wide window.
+std::optional<WindowExtent> explicitPoseWindow(const Eigen::Matrix3d& covariance_xyh,
+                                               const WindowPolicyOptions& options);
 
 /// The discretised window Registration::match will search for this request and map
 /// resolution (cells and heading steps), for edge checks and the traversal picture.

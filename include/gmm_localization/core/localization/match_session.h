@@ -93,8 +93,12 @@ class MatchSessionState {
   /// An initial pose (/initialpose) at stamp_s (NaN: valid at any time). z_known false: a planar
   /// pose, completed with z, roll and pitch (PriorTracker::completePlanarPose). Returns the pose
   /// searched around; *searched_z_known: whether its height is known.
+  /// covariance_xyh, when given, widens the search for a coarse pose (explicitPoseWindow);
+  /// *window_out, when given, receives the window searched.
   Pose6 setInitialPose(const Pose6& pose, double stamp_s, bool z_known,
-                       bool* searched_z_known = nullptr);
+                       bool* searched_z_known = nullptr,
+                       const Eigen::Matrix3d* covariance_xyh = nullptr,
+                       WindowExtent* window_out = nullptr);
 
   /// The prior, deskew twist and epoch for this scan's match.
   MatchStart beginMatch(const ScanInput& scan) const;
@@ -108,6 +112,10 @@ class MatchSessionState {
   const OdometryBuffer& odometry() const { return odometry_; }
   uint64_t epoch() const { return epoch_; }
   uint64_t resets() const { return resets_; }  ///< times time went backwards
+  /// Resets after which the search restarted around a remembered match of the same stamp
+  /// (PriorTracker::recallAt); lastResetRecalled(): whether the latest reset did.
+  uint64_t recalls() const { return recalls_; }
+  bool lastResetRecalled() const { return last_reset_recalled_; }
 
  protected:
   /// The time rule for a scan stamped stamp_s: returns how far time went backwards [s] (> 0:
@@ -118,10 +126,13 @@ class MatchSessionState {
   void armConfiguredPose();
 
   MatchSessionOptions options_;
+  WindowPolicyOptions window_policy_;
   PriorTracker tracker_;
   OdometryBuffer odometry_;
   uint64_t epoch_ = 0;
   uint64_t resets_ = 0;
+  uint64_t recalls_ = 0;
+  bool last_reset_recalled_ = false;
   bool have_last_scan_ = false;
   double last_scan_stamp_s_ = 0.0;
   std::optional<Pose6> configured_pose_;

@@ -128,8 +128,13 @@ class PriorTracker {
                   const Prior& used);
   /// A search that ran but was not accepted (input problems and "no prior" do not count).
   void onRejected();
-  /// Forgets everything (time went backwards).
+  /// Forgets everything (time went backwards) except the match history.
   void reset();
+  /// After a reset: when an accepted match of the history lies within
+  /// RelocalizationPolicyOptions::recall_max_gap_s of stamp_s, searches the wide window around
+  /// it (an explicit pose of source previous_match, valid at its own stamp) and returns true.
+  bool recallAt(double stamp_s);
+  size_t historySize() const { return history_.size(); }
 
   PriorMode mode() const;
   int consecutiveRejections() const { return consecutive_rejections_; }
@@ -150,6 +155,7 @@ class PriorTracker {
   PosteriorEstimate posterior_;
   bool has_match_ = false;
   Estimate match_{};
+  std::deque<Estimate> history_;  ///< accepted matches, in arrival order
   bool has_explicit_ = false;
   Pose6 explicit_pose_;
   double explicit_stamp_s_ = 0.0;
