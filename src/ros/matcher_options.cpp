@@ -130,6 +130,8 @@ LocalizationPolicyOptions loadLocalizationPolicyOptions(const ParamSource& nh) {
       param(nh, "relocalization/max_stale_prior_age_s", r.max_stale_prior_age_s, 0.0, 1e6);
   r.match_history_s = param(nh, "relocalization/match_history_s", r.match_history_s, 0.0, 86400.0);
   r.recall_max_gap_s = param(nh, "relocalization/recall_max_gap_s", r.recall_max_gap_s, 0.0, 10.0);
+  r.lost_after_rejections =
+      param(nh, "relocalization/lost_after_rejections", r.lost_after_rejections, 0, 1000000);
   requireValid("localization policy options", o.validate());
   return o;
 }

@@ -103,6 +103,8 @@ const char* priorModeName(PriorMode mode) {
       return "tracking";
     case PriorMode::kRelocalizing:
       return "relocalizing";
+    case PriorMode::kLost:
+      return "lost";
     default:
       return "no_prior";
   }
@@ -193,7 +195,7 @@ Prior PriorTracker::priorAt(double ts, const OdometryBuffer* odometry) const {
     p.z_known = explicit_z_known_;
     p.wide_window = explicit_window_;
     p.explicit_generation = explicit_generation_;
-    return p;
+    return widenIfLost(p);
   }
   // Ages are |scan - estimate|; an estimate from the future beyond the fresh limit (the other
   // timeline of a looping bag) is never used.
@@ -234,6 +236,16 @@ Prior PriorTracker::priorAt(double ts, const OdometryBuffer* odometry) const {
   } else {
     return Prior();
   }
+  return widenIfLost(p);
+}
+
+Prior PriorTracker::widenIfLost(Prior p) const {
+  if (!lost()) return p;
+  const WindowPolicyOptions& w = options_.window;
+  p.lost = true;
+  p.wide = true;
+  p.wide_window =
+      WindowExtent{w.global_max_half_xy_m, w.global_max_half_xy_m, w.global_max_half_heading_rad};
   return p;
 }
 
@@ -288,7 +300,14 @@ void PriorTracker::reset() {
   consecutive_rejections_ = 0;
 }
 
+bool PriorTracker::lost() const {
+  const int n = options_.relocalization.lost_after_rejections;
+  return n > 0 && consecutive_rejections_ >= n;
+}
+
 PriorMode PriorTracker::mode() const {
+  const bool has_prior = has_explicit_ || has_posterior_ || has_match_;
+  if (has_prior && lost()) return PriorMode::kLost;
   if (has_explicit_ || (relocalizing_ && (has_posterior_ || has_match_))) {
     return PriorMode::kRelocalizing;
   }

@@ -53,17 +53,6 @@ void removeStaleSpillDirectories(const std::string& parent) {
   }
 }
 
-/// What an exception in flight says, for a failure reason. Call from a catch block only.
-std::string currentExceptionText() {
-  try {
-    throw;
-  } catch (const std::exception& e) {
-    return e.what();
-  } catch (...) {
-    return "an exception of unknown type";
-  }
-}
-
 }  // namespace
 
 std::string MapBuilderOptions::validate() const {

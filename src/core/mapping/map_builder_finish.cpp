@@ -29,17 +29,6 @@ struct TileOutcome {
   std::string error;
 };
 
-/// What an exception in flight says, for a failure reason. Call from a catch block only.
-std::string currentExceptionText() {
-  try {
-    throw;
-  } catch (const std::exception& e) {
-    return e.what();
-  } catch (...) {
-    return "an exception of unknown type";
-  }
-}
-
 std::string tileName(const TileId& t) {
   return "(" + std::to_string(t.x) + ", " + std::to_string(t.y) + ")";
 }

@@ -3,6 +3,7 @@
 // (map_builder_finish.cpp). The public methods of MapBuilder call the ones here and turn any
 // exception into a failure (nothing is thrown across the builder's API).
 
+#include <exception>
 #include <memory>
 #include <set>
 #include <string>
@@ -48,5 +49,16 @@ struct MapBuilder::Impl {
   /// Marks the builder failed with explain(error), then abandon()s; returns the reason.
   std::string failWith(const std::string& error);
 };
+
+/// What an exception in flight says, for a failure reason. Call from a catch block only.
+inline std::string currentExceptionText() {
+  try {
+    throw;
+  } catch (const std::exception& e) {
+    return e.what();
+  } catch (...) {
+    return "an exception of unknown type";
+  }
+}
 
 }  // namespace gmm_localization

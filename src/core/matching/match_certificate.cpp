@@ -38,6 +38,8 @@ const char* certificateFailureName(CertificateFailure failure) {
       return "window_edge";
     case CertificateFailure::kBudget:
       return "budget";
+    case CertificateFailure::kGlobalSearch:
+      return "global_search";
   }
   return "unknown";
 }

@@ -280,7 +280,12 @@ RegistrationResult<MatchResult> Registration::finish(
   out.covariance_xyh = out.covariance_detail.covariance;
   const double t3c = tick();
   if (timing) timing->covariance_s = t3c - t3;
-  out.certificate = certifyOptimum(prepared.problem, out.search, options_.certificate);
+  if (options_.certificate.enabled &&
+      prepared.problem.window().sizeH() >= options_.interval_search_min_headings) {
+    out.certificate.failure = CertificateFailure::kGlobalSearch;  // uncertified: see the enum
+  } else {
+    out.certificate = certifyOptimum(prepared.problem, out.search, options_.certificate);
+  }
   {
     const double res = map.geometry().resolution_m;
     const double step = prepared.problem.window().heading_step_rad;

@@ -119,8 +119,10 @@ RasterWindow::RasterWindow(const ChunkMap& map, int64_t gx_min, int64_t gy_min, 
 
 uint8_t RasterWindow::neighbourBound(int layer, int64_t gx, int64_t gy, int64_t size,
                                      int32_t zb) const {
-  const int64_t nx = ((gx >> shift_) + 1) << shift_;
-  const int64_t ny = ((gy >> shift_) + 1) << shift_;
+  // The first cells of the next chunks: (chunk index + 1) x cells (no shift of a negative).
+  const int64_t cells = int64_t{1} << shift_;
+  const int64_t nx = ((gx >> shift_) + 1) * cells;
+  const int64_t ny = ((gy >> shift_) + 1) * cells;
   const bool right = nx < gx + size, up = ny < gy + size;
   uint8_t v = 0;
   if (right) v = std::max(v, value(layer, nx, gy, zb));

@@ -124,6 +124,20 @@ class LocalizerPipelineTest : public ::testing::Test {
     EXPECT_LE(std::abs(angleDiff(a.yaw, truth_pose.yaw)), tol_yaw) << what;
   }
 
+  /// The drive from a configured pose 2 m off, then again with the same stamps (a looping bag):
+  /// the second pass's reports.
+  static auto loopTheDrive(LocalizerPipeline& p) {
+    p.setMap(map_);
+    Pose6 start = truth(0.05);
+    start.x += 2.0;
+    p.setConfiguredPose(start, true);
+    drive(p, kT0, 0.2);
+    p.takeReports();
+    EXPECT_EQ(p.resets(), 0u);
+    drive(p, kT0, 0.2);
+    return p.takeReports();
+  }
+
   static std::unique_ptr<testing::SyntheticWorld> world_;
   static std::shared_ptr<const ChunkMap> map_;
   static std::map<int, PointList> scans_;
@@ -270,14 +284,7 @@ TEST_F(LocalizerPipelineTest, RecoversWhenTimeGoesBackwards) {
   auto created = LocalizerPipeline::create(options());
   ASSERT_TRUE(created.ok());
   LocalizerPipeline& p = created.value();
-  p.setMap(map_);
-  p.setConfiguredPose(offsetPose(truth(0.05), 2.0, 0.0, 0.0), true);
-  drive(p, kT0, 0.2);
-  p.takeReports();
-  EXPECT_EQ(p.resets(), 0u);
-  // The bag loops: the same drive, 6 s earlier.
-  drive(p, kT0, 0.2);
-  const auto reports = p.takeReports();
+  const auto reports = loopTheDrive(p);  // the same drive, 6 s earlier
   EXPECT_EQ(p.resets(), 1u);
   EXPECT_EQ(p.filter().stops(), 1u);
   ASSERT_FALSE(reports.empty());
@@ -305,12 +312,7 @@ TEST_F(LocalizerPipelineTest, WithoutAMatchHistoryTimeGoingBackwardsReArmsTheCon
   auto created = LocalizerPipeline::create(o);
   ASSERT_TRUE(created.ok());
   LocalizerPipeline& p = created.value();
-  p.setMap(map_);
-  p.setConfiguredPose(offsetPose(truth(0.05), 2.0, 0.0, 0.0), true);
-  drive(p, kT0, 0.2);
-  p.takeReports();
-  drive(p, kT0, 0.2);
-  const auto reports = p.takeReports();
+  const auto reports = loopTheDrive(p);
   EXPECT_EQ(p.resets(), 1u);
   ASSERT_FALSE(reports.empty());
   EXPECT_EQ(reports.front().match.prior.source, PriorSource::kConfigured);

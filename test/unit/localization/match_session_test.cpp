@@ -301,6 +301,36 @@ TEST(MatchSession, AcceptedAndRejectedOutcomesDriveTheTracker) {
   EXPECT_EQ(s.tracker().consecutiveRejections(), 0);
 }
 
+TEST(MatchSession, RejectionsInARowMakeTheLocalizationLostAndSearchTheGlobalWindow) {
+  LocalizationPolicyOptions policy;
+  policy.relocalization.max_consecutive_rejections = 2;
+  policy.relocalization.lost_after_rejections = 4;
+  policy.window.global_max_half_xy_m = 30.0;
+  Session s(MatchSessionOptions(), policy);
+  s.setConfiguredPose(poseAt(5.0, 5.0, 0.0), true);
+  const ScanInput a = scanAt(10.0);
+  MatchStart start = s.beginMatch(a);
+  for (int k = 1; k <= 4; ++k) {
+    EXPECT_FALSE(start.prior.lost) << k;
+    MatchReport rejected = reportWith(a, start, MatchOutcome::kRejected);
+    ASSERT_TRUE(s.finishMatch(start.epoch, &rejected));
+    start = s.beginMatch(a);
+  }
+  EXPECT_EQ(s.tracker().mode(), PriorMode::kLost);
+  EXPECT_STREQ(priorModeName(s.tracker().mode()), "lost");
+  EXPECT_TRUE(start.prior.lost);
+  EXPECT_TRUE(start.prior.wide);
+  EXPECT_DOUBLE_EQ(start.prior.wide_window.half_x_m, 30.0);
+  EXPECT_DOUBLE_EQ(start.prior.wide_window.half_heading_rad,
+                   policy.window.global_max_half_heading_rad);
+  EXPECT_DOUBLE_EQ(start.prior.pose.x, 5.0);  // around the same centre
+  // The first accepted match ends it.
+  MatchReport r = acceptedReport(a, start, 0.3, 0.0);
+  ASSERT_TRUE(s.finishMatch(start.epoch, &r));
+  EXPECT_EQ(s.tracker().mode(), PriorMode::kTracking);
+  EXPECT_FALSE(s.beginMatch(a).prior.lost);
+}
+
 TEST(MatchSession, TheMatchStartsWithTheDeskewTwistWhenConfigured) {
   MatchSessionOptions o;
   Session s(o, LocalizationPolicyOptions());

@@ -29,6 +29,20 @@ SearchWindow fullTurnWindow(std::mt19937& rng, double xy) {
   return SearchWindow::fromExtent(prior, 0.6 + 1.6 * u(rng), 0.6 + 1.6 * u(rng), 3.1416, 0.1, 0.2);
 }
 
+/// Brute force: the best exact score of the leaves of node (j0, hl, layer, tx, ty).
+int64_t bestLeaf(const SearchProblem& problem, int j0, int hl, int layer, int tx, int ty) {
+  const SearchWindow& w = problem.window();
+  int64_t best = 0;
+  for (int j = j0; j < std::min(j0 + (1 << hl), w.sizeH()); ++j) {
+    for (int y = ty; y < std::min(ty + (1 << layer), w.sizeY()); ++y) {
+      for (int x = tx; x < std::min(tx + (1 << layer), w.sizeX()); ++x) {
+        best = std::max(best, problem.score(j, 0, x, y));
+      }
+    }
+  }
+  return best;
+}
+
 void expectSame(const SearchOutcome& ex, const GlobalSearchOutcome& g, int c) {
   EXPECT_TRUE(g.complete) << "case " << c;
   EXPECT_EQ(ex.score, g.best.score) << "case " << c;
@@ -98,14 +112,7 @@ TEST(GlobalSearch, IntervalBoundIsAtLeastEveryLeafBelowIt) {
       const int j0 = static_cast<int>(u(rng) * w.sizeH());
       const int tx = static_cast<int>(u(rng) * w.sizeX());
       const int ty = static_cast<int>(u(rng) * w.sizeY());
-      int64_t best = 0;
-      for (int j = j0; j < std::min(j0 + (1 << hl), w.sizeH()); ++j) {
-        for (int y = ty; y < std::min(ty + (1 << layer), w.sizeY()); ++y) {
-          for (int x = tx; x < std::min(tx + (1 << layer), w.sizeX()); ++x) {
-            best = std::max(best, problem.score(j, 0, x, y));
-          }
-        }
-      }
+      const int64_t best = bestLeaf(problem, j0, hl, layer, tx, ty);
       const int64_t b = headingIntervalBound(problem, j0, hl, layer, tx, ty);
       ASSERT_GE(b, best) << "case " << c << " node " << k << " hl " << hl << " layer " << layer;
       if (b == best) ++tight;
@@ -143,14 +150,7 @@ TEST(GlobalSearch, IntervalBoundCoversTheReachOfAFarPoint) {
       const int j0 = static_cast<int>(u(rng) * w.sizeH());
       const int tx = static_cast<int>(u(rng) * w.sizeX());
       const int ty = static_cast<int>(u(rng) * w.sizeY());
-      int64_t best = 0;
-      for (int j = j0; j < std::min(j0 + (1 << hl), w.sizeH()); ++j) {
-        for (int y = ty; y < std::min(ty + (1 << layer), w.sizeY()); ++y) {
-          for (int x = tx; x < std::min(tx + (1 << layer), w.sizeX()); ++x) {
-            best = std::max(best, problem.score(j, 0, x, y));
-          }
-        }
-      }
+      const int64_t best = bestLeaf(problem, j0, hl, layer, tx, ty);
       if (best > 0) ++scoring;
       ASSERT_GE(headingIntervalBound(problem, j0, hl, layer, tx, ty), best)
           << "case " << c << " node " << k << " hl " << hl << " layer " << layer;

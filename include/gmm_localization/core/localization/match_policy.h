@@ -119,6 +119,11 @@ struct RelocalizationPolicyOptions {
   /// instead of waiting for a person or re-arming the configured pose.
   double match_history_s = 600.0;
   double recall_max_gap_s = 0.5;
+  /// Lost: after this many rejected matches in a row (0: never) the search covers the global
+  /// window (WindowPolicyOptions::global_max_*: by default +-12.5 m and the full turn) around
+  /// the prior, until a match is accepted. Each such search takes seconds; scans arriving
+  /// meanwhile are dropped (counted).
+  int lost_after_rejections = 15;
 
   std::string validate() const;
 };
@@ -163,6 +168,9 @@ struct Prior {
   double age_s = 0.0;
   /// True when odometry carried the estimate to the scan stamp (else constant velocity).
   bool carried_by_odometry = false;
+  /// The localization is judged lost (RelocalizationPolicyOptions::lost_after_rejections): the
+  /// window is the global one.
+  bool lost = false;
   /// Which explicit pose (PriorTracker::setExplicitPose call, counted from 1) this prior came
   /// from; 0 for other sources. Lets a match that started before a newer explicit pose leave
   /// that pose pending.

@@ -93,8 +93,9 @@ struct PosteriorEstimate {
   BodyTwist twist;
 };
 
-enum class PriorMode { kNoPrior, kTracking, kRelocalizing };
-const char* priorModeName(PriorMode mode);  ///< "no_prior", "tracking", "relocalizing"
+enum class PriorMode { kNoPrior, kTracking, kRelocalizing, kLost };
+/// "no_prior", "tracking", "relocalizing", "lost"
+const char* priorModeName(PriorMode mode);
 
 /// Not thread-safe (the matcher guards it with its state mutex).
 class PriorTracker {
@@ -137,6 +138,8 @@ class PriorTracker {
   size_t historySize() const { return history_.size(); }
 
   PriorMode mode() const;
+  /// RelocalizationPolicyOptions::lost_after_rejections rejected matches in a row.
+  bool lost() const;
   int consecutiveRejections() const { return consecutive_rejections_; }
   bool hasPosterior() const { return has_posterior_; }
   const PosteriorEstimate& posterior() const { return posterior_; }
@@ -149,6 +152,8 @@ class PriorTracker {
     BodyTwist twist;
   };
   Prior carried(const Estimate& e, double scan_stamp_s, const OdometryBuffer* odometry) const;
+  /// The global window when lost() (Prior::lost).
+  Prior widenIfLost(Prior p) const;
 
   LocalizationPolicyOptions options_;
   bool has_posterior_ = false;

@@ -61,6 +61,9 @@ enum class CertificateFailure {
   kAmbiguous,   ///< a plausible pose lies outside the exclusion zone
   kWindowEdge,  ///< a plausible pose lies on the window's border
   kBudget,      ///< max_evaluations reached before the proof completed
+  /// Not attempted: the window was searched globally (heading intervals, global_search.h),
+  /// where the proof would cost as much as the search; the next (tracking) match certifies.
+  kGlobalSearch,
 };
 const char* certificateFailureName(CertificateFailure failure);  ///< "", "ambiguous", ...
 
