@@ -22,6 +22,8 @@
 # build, the seeds, a regression or a fuzz run fails.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/env.sh"
+# shellcheck source=job_pool.sh
+source "$(dirname "${BASH_SOURCE[0]}")/job_pool.sh"
 FUZZ_TIME="${GMM_FUZZ_TIME:-20}"
 TIMEOUT="${GMM_FUZZ_TIMEOUT:-10}"
 JOBS="${GMM_JOBS:-$(nproc)}"
@@ -131,19 +133,8 @@ run_one() {  # run_one <target>: fuzzes for FUZZ_TIME s; prints one summary line
 
 if [ "$FUZZ_TIME" -gt 0 ]; then
   fuzz_start=$SECONDS
-  failed=0 running=0
-  for t in "${targets[@]}"; do
-    run_one "$t" &
-    running=$((running + 1))
-    if [ "$running" -ge "$JOBS" ]; then
-      wait -n || failed=$((failed + 1))
-      running=$((running - 1))
-    fi
-  done
-  while [ "$running" -gt 0 ]; do
-    wait -n || failed=$((failed + 1))
-    running=$((running - 1))
-  done
+  failed=0
+  run_pool "$JOBS" run_one "${targets[@]}" || failed=$?
   echo "[fuzz] ${#targets[@]} targets x ${FUZZ_TIME} s in $((SECONDS - fuzz_start)) s," \
     "$((${#targets[@]} - failed))/${#targets[@]} without a finding"
   [ "$failed" -eq 0 ] || status=1

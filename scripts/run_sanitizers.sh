@@ -19,6 +19,8 @@
 # GMM_ASAN_CXX and GMM_TSAN_CXX the compilers (clang++-14 and g++ by default, see below).
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/env.sh"
+# shellcheck source=job_pool.sh
+source "$(dirname "${BASH_SOURCE[0]}")/job_pool.sh"
 SANITIZERS="${GMM_SANITIZERS-asan tsan}"
 JOBS="${GMM_JOBS:-$(nproc)}"
 LOGS="$GMM_WS/sanitizers"
@@ -114,21 +116,12 @@ run_pass() {
   shift 2
   mkdir -p "$LOGS/$pass"
   rm -f "$LOGS/$pass"/*.log
-  local failed=0 running=0 t
-  for t in "$@"; do
-    run_one "$pass" "$build/devel/lib/gmm_localization/$t" &
-    running=$((running + 1))
-    if [ "$running" -ge "$JOBS" ]; then
-      wait -n || failed=$((failed + 1))
-      running=$((running - 1))
-    fi
-  done
-  while [ "$running" -gt 0 ]; do
-    wait -n || failed=$((failed + 1))
-    running=$((running - 1))
-  done
+  local failed=0
+  run_pool "$JOBS" run_built_test "$@" || failed=$?
   return "$failed"
 }
+# run_built_test <test>: run_one for a test of the pass and build of the calling run_pass.
+run_built_test() { run_one "$pass" "$build/devel/lib/gmm_localization/$1"; }
 
 # pass <name> <-fsanitize list> <compiler> <test dir spec>...
 pass() {

@@ -18,6 +18,7 @@
 
 #include "gmm_localization/ros/cloud_conversion.h"
 #include "gmm_localization/ros/pose_conversion.h"
+#include "rostest_main.h"
 
 namespace gmm_localization {
 namespace node {
@@ -233,12 +234,5 @@ TEST_F(CloudMergerRostest, MergesIntoBaseLinkAndSurvivesBadInput) {
 }  // namespace gmm_localization
 
 int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "cloud_merger_rostest");
-  ros::AsyncSpinner spinner(2);
-  spinner.start();
-  const int result = RUN_ALL_TESTS();
-  spinner.stop();
-  ros::shutdown();
-  return result;
+  return gmm_localization::node::runRostestMain(argc, argv, "cloud_merger_rostest");
 }

@@ -28,6 +28,7 @@
 #include "gmm_localization/core/raster/chunk_planner.h"
 #include "gmm_localization/core/raster/rasterizer.h"
 #include "gmm_localization/ros/map_server_client.h"
+#include "rostest_main.h"
 #include "support/test_map.h"
 
 namespace gmm_localization {
@@ -325,12 +326,5 @@ TEST_F(MapServerRostest, MissingMapDirectoryFailsToLoad) {
 }  // namespace gmm_localization
 
 int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "map_server_rostest");
-  ros::AsyncSpinner spinner(2);
-  spinner.start();
-  const int result = RUN_ALL_TESTS();
-  spinner.stop();
-  ros::shutdown();
-  return result;
+  return gmm_localization::node::runRostestMain(argc, argv, "map_server_rostest");
 }
