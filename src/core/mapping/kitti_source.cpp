@@ -237,7 +237,14 @@ Result<bool> KittiScanSource::next(PointBatch& batch) {
   batch.clear();
   if (next_ >= scans_.size()) return false;
   const Scan& scan = scans_[next_++];
-  auto points = readKittiScan(scan.path, options_.fields);
+  // NNNNNN/points.bin is the keyframe dumps' layout: x, y, z records.
+  const std::string keyframe = "/points.bin";
+  const bool is_keyframe =
+      scan.path.size() >= keyframe.size() &&
+      scan.path.compare(scan.path.size() - keyframe.size(), keyframe.size(), keyframe) == 0;
+  const KittiFields fields =
+      options_.fields == KittiFields::kAuto && is_keyframe ? KittiFields::kXyz : options_.fields;
+  auto points = readKittiScan(scan.path, fields);
   if (!points) return Result<bool>::failure(points.error());
   setBatchFromSensorFrame(*points, scan.map_T_sensor, batch);
   return true;

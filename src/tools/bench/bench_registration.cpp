@@ -2,6 +2,8 @@
 // time, evaluations and equality with the exhaustive search for the paper's window and a
 // tracking window, success and time of PCL NDT and GICP from the same offsets, and time against
 // scan size. All numbers come from this run, as ratios where the machine's noise matters.
+// Reads KITTI-style folders as build_map does (a KITTI odometry sequence with its calib.txt,
+// the simulator's KITTI output, keyframe dumps); --out DIR keeps the run (bench_output.h).
 
 #include <algorithm>
 #include <chrono>
@@ -10,13 +12,16 @@
 #include <cstdlib>
 #include <cstring>
 #include <ctime>
+#include <filesystem>
 #include <fstream>
 #include <random>
 #include <string>
 #include <thread>
 
-#include "bench_data.h"
-#include "bench_peers.h"
+#include "bench/bench_data.h"
+#include "bench/bench_options.h"
+#include "bench/bench_output.h"
+#include "bench/bench_peers.h"
 #include "gmm_localization/core/common/types.h"
 #include "gmm_localization/core/matching/registration.h"
 
@@ -36,131 +41,6 @@ double now() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
-struct Options {
-  std::string map_dir, scans_dir, mapping_dir;
-  int count = 30;
-  int exhaustive_every = 3;  // exhaustive reference on every n-th scan of each window
-  int peer_count = 20;
-  uint32_t seed = 1;
-  double offset_m = 10.0, offset_deg = 15.0;
-  double raster_radius_m = 110.0;
-  bool sizes = true;
-  bool global = true;
-  int global_count = 10;
-  std::vector<double> global_regions_m = {25.0, 50.0, 100.0};
-  RegistrationOptions reg;
-  RasterOptions raster;
-};
-
-void usage() {
-  std::printf(
-      "bench_registration --map DIR --scans KITTI_DIR [--mapping KITTI_DIR] [options]\n"
-      "  --map DIR            Gaussian mixture map (build_map output)\n"
-      "  --scans DIR          localization scans with ground-truth poses (simulate --kitti)\n"
-      "  --mapping DIR        mapping-pass scans: target clouds for PCL NDT/GICP (optional)\n"
-      "  --count N            test scans (30)\n"
-      "  --peer-count N       scans for the NDT/GICP comparison (20; 0 = skip)\n"
-      "  --exhaustive-every N check branch-and-bound against exhaustive on every N-th scan (3)\n"
-      "  --offset-m M         initial offsets uniform in a disc of this radius (10)\n"
-      "  --offset-deg D       and within +-D degrees of heading (15)\n"
-      "  --seed N             offset seed (1)\n"
-      "  --heading-step-deg D search heading step (0.5)\n"
-      "  --max-points N       search points after voxelling (registration default)\n"
-      "  --voxel M            search voxel (registration default)\n"
-      "  --ground-share S     largest share of ground points among search points (default)\n"
-      "  --z-period N         raster z coarsening period (raster default)\n"
-      "  --layers N           raster layers (raster default)\n"
-      "  --refine-points N    points the hill climb scores (registration default)\n"
-      "  --global-count N     scans per global-localization row (10; first N of the test scans)\n"
-      "  --global-regions A,B square region edges of the global rows [m] (25,50,100)\n"
-      "  --global-points N    search points of the global search (registration default)\n"
-      "  --global-budget N    node scores the global search may compute (default: unbounded)\n"
-      "  --global-root-headings L  root heading intervals of 2^L headings (default)\n"
-      "  --global-split-share S    heading-vs-translation split rule (default)\n"
-      "  --no-global          skip the global-localization table\n"
-      "  --no-sizes           skip the scan-size table\n");
-}
-
-bool parse(int argc, char** argv, Options& o) {
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto next = [&]() -> const char* { return i + 1 < argc ? argv[++i] : nullptr; };
-    const char* v = nullptr;
-    if (a == "--help" || a == "-h") return false;
-    if (a == "--no-sizes") {
-      o.sizes = false;
-      continue;
-    }
-    if (a == "--no-global") {
-      o.global = false;
-      continue;
-    }
-    if ((v = next()) == nullptr) {
-      std::fprintf(stderr, "option %s needs a value\n", a.c_str());
-      return false;
-    }
-    if (a == "--map")
-      o.map_dir = v;
-    else if (a == "--scans")
-      o.scans_dir = v;
-    else if (a == "--mapping")
-      o.mapping_dir = v;
-    else if (a == "--count")
-      o.count = std::atoi(v);
-    else if (a == "--global-count")
-      o.global_count = std::atoi(v);
-    else if (a == "--global-regions") {
-      o.global_regions_m.clear();
-      for (const char* q = v; *q != '\0';) {
-        char* end = nullptr;
-        o.global_regions_m.push_back(std::strtod(q, &end));
-        if (end == q) break;
-        q = *end == ',' ? end + 1 : end;
-      }
-    } else if (a == "--global-points")
-      o.reg.global.max_points = static_cast<size_t>(std::atoi(v));
-    else if (a == "--global-budget")
-      o.reg.global.max_evaluations = std::atoll(v);
-    else if (a == "--global-root-headings")
-      o.reg.global.root_heading_levels = std::atoi(v);
-    else if (a == "--global-split-share")
-      o.reg.global.heading_split_share = std::atof(v);
-    else if (a == "--peer-count")
-      o.peer_count = std::atoi(v);
-    else if (a == "--exhaustive-every")
-      o.exhaustive_every = std::atoi(v);
-    else if (a == "--offset-m")
-      o.offset_m = std::atof(v);
-    else if (a == "--offset-deg")
-      o.offset_deg = std::atof(v);
-    else if (a == "--seed")
-      o.seed = static_cast<uint32_t>(std::atoi(v));
-    else if (a == "--heading-step-deg")
-      o.reg.heading_step_rad = std::atof(v) * M_PI / 180.0;
-    else if (a == "--max-points")
-      o.reg.filter.max_points = static_cast<size_t>(std::atoi(v));
-    else if (a == "--voxel")
-      o.reg.filter.voxel_m = std::atof(v);
-    else if (a == "--ground-share")
-      o.reg.filter.ground_share = std::atof(v);
-    else if (a == "--z-period")
-      o.raster.z_coarsening_period = std::atoi(v);
-    else if (a == "--refine-points")
-      o.reg.refine_max_points = static_cast<size_t>(std::atoi(v));
-    else if (a == "--layers")
-      o.raster.num_layers = std::atoi(v);
-    else {
-      std::fprintf(stderr, "unknown option %s\n", a.c_str());
-      return false;
-    }
-  }
-  if (o.map_dir.empty() || o.scans_dir.empty()) {
-    std::fprintf(stderr, "--map and --scans are required\n");
-    return false;
-  }
-  return true;
-}
-
 struct WindowRow {
   std::string name;
   std::vector<double> filter_ms, search_ms, filter_search_ms, total_ms, fraction, error_m,
@@ -171,12 +51,27 @@ struct WindowRow {
                                            // points per heading; evaluations x points
   int success = 0, runs = 0, equal = 0, compared = 0, failures = 0;
   std::vector<double> exhaustive_ms;
+  std::vector<ScanRecord> records;  ///< one per scan, for --out
 };
+
+std::string fmt(const char* format, double a, double b) {
+  char buf[256];
+  std::snprintf(buf, sizeof buf, format, a, b);
+  return buf;
+}
+
+/// The prior's error against the truth, into the record.
+void priorError(const Pose6& prior, const Eigen::Isometry3d& truth, ScanRecord& rec) {
+  const Pose6 t = fromIsometry(truth);
+  rec.offset_m = std::hypot(prior.x - t.x, prior.y - t.y);
+  rec.offset_deg = std::abs(angleDiff(prior.yaw, t.yaw)) * 180.0 / M_PI;
+}
 
 bool success(double err_m, double err_deg) { return err_m < 0.5 && err_deg < 1.0; }
 
-void runWindow(const Options& o, const ChunkMap& map, const std::vector<BenchScan>& scans,
-               double half_m, double half_deg, double off_m, double off_deg, WindowRow& row) {
+void runWindow(const BenchOptions& o, const ChunkMap& map, const std::vector<BenchScan>& scans,
+               double half_m, double half_deg, double off_m, double off_deg, WindowRow& row,
+               const std::string& section = "window") {
   const Registration reg(o.reg);
   std::mt19937 rng(o.seed);
   // The exhaustive reference runs after the timed pass: seconds of it between matches would
@@ -185,6 +80,7 @@ void runWindow(const Options& o, const ChunkMap& map, const std::vector<BenchSca
     size_t scan;
     MatchRequest request;
     SearchOutcome branch_and_bound;
+    size_t record;
   };
   std::vector<Check> checks;
   for (size_t i = 0; i < scans.size(); ++i) {
@@ -194,10 +90,18 @@ void runWindow(const Options& o, const ChunkMap& map, const std::vector<BenchSca
     req.half_x_m = req.half_y_m = half_m;
     req.half_heading_rad = half_deg * M_PI / 180.0;
     ++row.runs;
+    row.records.emplace_back();
+    ScanRecord& rec = row.records.back();
+    rec.section = section;
+    rec.window = row.name;
+    rec.scan = s.index;
+    rec.raw_points = static_cast<double>(s.points.size());
+    priorError(req.prior, s.truth, rec);
     const double t0 = now();
     auto prepared = reg.prepare(map, s.points, req);
     if (!prepared.ok()) {
       ++row.failures;
+      rec.failure = prepared.error();
       std::fprintf(stderr, "scan %d: %s\n", s.index, prepared.error().c_str());
       continue;
     }
@@ -207,10 +111,13 @@ void runWindow(const Options& o, const ChunkMap& map, const std::vector<BenchSca
     const double t2 = now();
     if (!complete) {
       ++row.failures;
+      rec.failure = "search stopped at its budget";
       std::fprintf(stderr, "scan %d: search stopped at its budget\n", s.index);
       continue;
     }
-    if (o.exhaustive_every > 0 && i % o.exhaustive_every == 0) checks.push_back({i, req, bb});
+    if (o.exhaustive_every > 0 && i % o.exhaustive_every == 0) {
+      checks.push_back({i, req, bb, row.records.size() - 1});
+    }
     const double n = static_cast<double>(prepared->problem.points(0).size());
     const double t3 = now();
     RegistrationTiming timing;
@@ -227,8 +134,14 @@ void runWindow(const Options& o, const ChunkMap& map, const std::vector<BenchSca
     row.fraction.push_back(bb.stats.fraction());
     row.points.push_back(n);
     row.lookups.push_back(n * bb.stats.evaluations);
+    rec.search_points = n;
+    rec.prepare_ms = row.filter_ms.back();
+    rec.search_ms = row.search_ms.back();
+    rec.total_ms = row.total_ms.back();
+    rec.evaluations_fraction = bb.stats.fraction();
     if (!r.ok()) {
       ++row.failures;
+      rec.failure = r.error();
       std::fprintf(stderr, "scan %d: %s\n", s.index, r.error().c_str());
       continue;
     }
@@ -238,6 +151,11 @@ void runWindow(const Options& o, const ChunkMap& map, const std::vector<BenchSca
     row.error_m.push_back(e);
     row.error_deg.push_back(eh);
     row.success += success(e, eh);
+    rec.matched = true;
+    rec.error_m = e;
+    rec.error_deg = eh;
+    rec.success = success(e, eh);
+    rec.certified = r->certificate.certified ? 1 : 0;
     if (r->certificate.certified) {
       ++row.certified;
       row.certified_wrong += success(e, eh) ? 0 : 1;
@@ -251,13 +169,46 @@ void runWindow(const Options& o, const ChunkMap& map, const std::vector<BenchSca
     row.exhaustive_ms.push_back((now() - te) * 1e3);
     const SearchOutcome& bb = c.branch_and_bound;
     ++row.compared;
-    row.equal += (ex.score == bb.score && ex.heading_index == bb.heading_index && ex.tx == bb.tx &&
-                  ex.ty == bb.ty);
+    const bool equal = ex.score == bb.score && ex.heading_index == bb.heading_index &&
+                       ex.tx == bb.tx && ex.ty == bb.ty;
+    row.equal += equal;
+    row.records[c.record].equal_to_exhaustive = equal ? 1 : 0;
   }
 }
 
-void printWindows(const std::vector<WindowRow>& rows) {
-  std::printf(
+JsonObject windowJson(const WindowRow& r, double half_m, double half_deg, double off_m,
+                      double off_deg) {
+  JsonObject j;
+  j.add("name", r.name)
+      .add("half_extent_m", half_m)
+      .add("half_heading_deg", half_deg)
+      .add("offset_m", off_m)
+      .add("offset_deg", off_deg)
+      .add("scans", r.runs)
+      .add("success", r.success)
+      .add("failures", r.failures)
+      .add("equal_to_exhaustive", r.equal)
+      .add("compared_with_exhaustive", r.compared)
+      .add("certified", r.certified)
+      .add("certified_wrong", r.certified_wrong)
+      .add("search_points_median", median(r.points))
+      .add("prepare_ms_median", median(r.filter_ms))
+      .add("search_ms_median", median(r.search_ms))
+      .add("search_ms_p99", percentile(r.search_ms, 99))
+      .add("match_total_ms_median", median(r.total_ms))
+      .add("match_total_ms_p99", percentile(r.total_ms, 99))
+      .add("evaluations_fraction_median", median(r.fraction))
+      .add("evaluations_fraction_max", percentile(r.fraction, 100))
+      .add("exhaustive_ms_median", median(r.exhaustive_ms))
+      .add("error_m_median", median(r.error_m))
+      .add("error_m_p99", percentile(r.error_m, 99))
+      .add("error_deg_median", median(r.error_deg))
+      .add("certificate_ms_median", median(r.certificate_ms));
+  return j;
+}
+
+void printWindows(Report& out, const std::vector<WindowRow>& rows) {
+  out.print(
       "| window | scans | search points (median) | prepare ms (median) | search ms median / p99 | "
       "filter + search ms median / p99 | "
       "refine / covariance / obstacles ms (median) | match total ms median / p99 | evaluations, %% "
@@ -265,9 +216,9 @@ void printWindows(const std::vector<WindowRow>& rows) {
       "lookups, millions (median / max) | equal to exhaustive | exhaustive search ms (median) | "
       "success <0.5 m, <1 deg | error after refinement median / p99 | certificate ms (median) "
       "| certified (of them wrong) |\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  out.print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const WindowRow& r : rows) {
-    std::printf(
+    out.print(
         "| %s | %d | %.0f | %.1f | %.1f / %.1f | %.1f / %.1f | %.1f / %.1f / %.1f | %.1f / %.1f | "
         "%.3f / %.3f | "
         "%.1f / %.1f | %d/%d "
@@ -283,24 +234,81 @@ void printWindows(const std::vector<WindowRow>& rows) {
   }
 }
 
+/// The data set's summary lines: poses, scans, skipped poses, layout, calibration.
+void printData(Report& out, const char* what, const KittiInput& in, const KittiScans& d) {
+  out.print("%s %s: %zu poses in %s, %zu with a scan file", what, in.dir.c_str(), d.poses,
+            d.source.poses_file.c_str(), d.scans.size());
+  if (!d.missing.empty()) {
+    out.print(", %zu skipped (no scan file; first: %d)", d.missing.size(), d.missing.front());
+  }
+  out.print("; %s%s\n", d.layout.c_str(),
+            in.calib_file.empty() ? "; poses are the sensor's"
+                                  : ("; KITTI calibration " + in.calib_file +
+                                     " (poses: camera 0; map frame: first Velodyne frame)")
+                                        .c_str());
+  if (d.ambiguous)
+    std::fprintf(stderr, "warning: %s %s: %s\n", what, in.dir.c_str(), d.layout.c_str());
+}
+
+JsonObject dataJson(const KittiInput& in, const KittiScans& d) {
+  JsonObject j;
+  j.add("dir", in.dir)
+      .add("poses_file", d.source.poses_file)
+      .add("kitti_calib", in.calib_file)
+      .add("point_format", pointFormatName(d.source.fields))
+      .add("layout", d.layout)
+      .add("layout_ambiguous", d.ambiguous)
+      .add("poses", d.poses)
+      .add("scans_with_file", d.scans.size())
+      .add("skipped_without_file", d.missing.size())
+      .add("skipped", d.missing);
+  return j;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  Options o;
+  BenchOptions o;
   o.reg.global.max_evaluations = 0;  // the benchmark measures complete searches (--global-budget)
-  if (!parse(argc, argv, o)) {
-    usage();
-    return 2;
+  bool help = false;
+  if (!parseBenchOptions(argc, argv, o, help)) {
+    std::fputs(benchUsage(), help ? stdout : stderr);
+    return help ? 0 : 2;
+  }
+  if (!o.out_dir.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(o.out_dir, ec);
+    if (ec) {
+      std::fprintf(stderr, "--out %s: %s\n", o.out_dir.c_str(), ec.message().c_str());
+      return 1;
+    }
+  }
+  if (o.track_offset_m > 2.0 || o.track_offset_deg > 3.0) {
+    std::fprintf(stderr,
+                 "warning: tracking offsets %.2f m / %.2f deg reach beyond the +-2 m, +-3 deg "
+                 "window: some truths lie outside it\n",
+                 o.track_offset_m, o.track_offset_deg);
   }
   auto store = MapStore::open(o.map_dir);
   if (!store.ok()) {
     std::fprintf(stderr, "%s\n", store.error().c_str());
     return 1;
   }
-  auto scans = loadScans(o.scans_dir, o.count);
+  KittiScans data;
+  auto scans = loadScans(o.scans, o.count, &data);
   if (!scans.ok()) {
     std::fprintf(stderr, "%s\n", scans.error().c_str());
     return 1;
+  }
+  KittiScans mapping;
+  const bool with_peers = o.peer_count > 0 && !o.mapping.dir.empty();
+  if (with_peers) {
+    auto m = openKittiInput(o.mapping);
+    if (!m.ok()) {
+      std::fprintf(stderr, "--mapping: %s\n", m.error().c_str());
+      return 1;
+    }
+    mapping = std::move(m.value());
   }
   std::vector<Eigen::Vector3d> centres;
   size_t raw = 0;
@@ -314,42 +322,68 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s\n", map.error().c_str());
     return 1;
   }
+  Report out;
+  std::vector<ScanRecord> records;
+  JsonObject summary;
   char date[32];
   const std::time_t t = std::time(nullptr);
   std::strftime(date, sizeof(date), "%Y-%m-%d", std::localtime(&t));
-  std::printf("# Registration benchmark, %s, one thread\n\n", date);
-  std::printf("load average at start (1 min, %d cores): %s\n",
-              static_cast<int>(std::thread::hardware_concurrency()), loadAverage().c_str());
-  std::printf("map %s; %zu test scans from %s, %.0f raw points per scan on average\n",
-              o.map_dir.c_str(), scans->size(), o.scans_dir.c_str(),
-              static_cast<double>(raw) / scans->size());
-  std::printf(
+  const std::string load_start = loadAverage();
+  out.print("# Registration benchmark, %s, one thread\n\n", date);
+  out.print("load average at start (1 min, %d cores): %s\n",
+            static_cast<int>(std::thread::hardware_concurrency()), load_start.c_str());
+  printData(out, "test scans", o.scans, data);
+  if (with_peers) printData(out, "mapping scans", o.mapping, mapping);
+  out.print("map %s; %zu test scans from %s, %.0f raw points per scan on average\n",
+            o.map_dir.c_str(), scans->size(), o.scans.dir.c_str(),
+            static_cast<double>(raw) / scans->size());
+  out.print(
       "rasterized %zu chunks of %d x %d cells in %.2f s (%.1f ms per chunk), %.1f MB (%.2f MB per "
       "chunk)\n\n",
       rs.chunks, o.raster.chunkCells(), o.raster.chunkCells(), rs.seconds,
       1e3 * rs.seconds / std::max<size_t>(1, rs.chunks), rs.bytes / 1e6,
       rs.bytes / 1e6 / std::max<size_t>(1, rs.chunks));
+  std::string command;
+  for (int i = 0; i < argc; ++i) command += (i ? " " : "") + std::string(argv[i]);
+  summary.add("date", date)
+      .add("command", command)
+      .add("load_average_start", load_start)
+      .add("map", o.map_dir)
+      .add("test_scans", dataJson(o.scans, data))
+      .add("seed", static_cast<long long>(o.seed))
+      .add("heading_step_deg", o.reg.heading_step_rad * 180.0 / M_PI);
+  if (with_peers) summary.add("mapping_scans", dataJson(o.mapping, mapping));
 
   std::vector<WindowRow> rows(2);
-  rows[0].name = "paper: 25 m x 25 m, +-15 deg (offsets within " + std::to_string(int(o.offset_m)) +
-                 " m, " + std::to_string(int(o.offset_deg)) + " deg)";
+  rows[0].name =
+      fmt("paper: 25 m x 25 m, +-15 deg (offsets within %g m, %g deg)", o.offset_m, o.offset_deg);
   runWindow(o, map.value(), scans.value(), 12.5, 15.0, o.offset_m, o.offset_deg, rows[0]);
-  rows[1].name = "tracking: +-2 m, +-3 deg (offsets within 1.5 m, 2.5 deg)";
-  runWindow(o, map.value(), scans.value(), 2.0, 3.0, 1.5, 2.5, rows[1]);
-  std::printf("## Search windows\n\n");
-  printWindows(rows);
+  rows[1].name = fmt("tracking: +-2 m, +-3 deg (offsets within %g m, %g deg)", o.track_offset_m,
+                     o.track_offset_deg);
+  runWindow(o, map.value(), scans.value(), 2.0, 3.0, o.track_offset_m, o.track_offset_deg, rows[1]);
+  out.print("## Search windows\n\n");
+  out.print(
+      "Offsets: paper window within %g m, +-%g deg (--offset-m, --offset-deg); tracking window "
+      "within %g m, +-%g deg (--track-offset-m, --track-offset-deg).\n\n",
+      o.offset_m, o.offset_deg, o.track_offset_m, o.track_offset_deg);
+  printWindows(out, rows);
+  summary.add("windows", std::vector<JsonObject>{
+                             windowJson(rows[0], 12.5, 15.0, o.offset_m, o.offset_deg),
+                             windowJson(rows[1], 2.0, 3.0, o.track_offset_m, o.track_offset_deg)});
+  for (const WindowRow& r : rows) records.insert(records.end(), r.records.begin(), r.records.end());
 
+  std::vector<JsonObject> global_json;
   if (o.global && o.global_count > 0) {
     // Global localization: a prior anywhere in a disc inside the square region, any heading;
     // the search covers the whole square and the full turn. The map is rasterized around the
     // priors, as the map server serves it around a rough fix: the region plus the scan reach.
-    std::printf("\n## Global localization (heading-interval branch-and-bound, one thread)\n\n");
-    std::printf(
+    out.print("\n## Global localization (heading-interval branch-and-bound, one thread)\n\n");
+    out.print(
         "| region | loaded map | scans | poses per search (millions) | search ms median / max | "
         "match total ms median / max | evaluations (median) | evaluations x search points, "
         "millions (median) "
         "| success <0.5 m, <1 deg |\n");
-    std::printf("|---|---|---|---|---|---|---|---|---|\n");
+    out.print("|---|---|---|---|---|---|---|---|---|\n");
     std::vector<BenchScan> first(scans->begin(),
                                  scans->begin() + std::min<size_t>(scans->size(), o.global_count));
     const double largest = *std::max_element(o.global_regions_m.begin(), o.global_regions_m.end());
@@ -371,6 +405,8 @@ int main(int argc, char** argv) {
           std::fprintf(stderr, "%s\n", gmap.error().c_str());
           continue;
         }
+        const std::string name = fmt("%.0f m x %.0f m x 360 deg", 2 * half, 2 * half) +
+                                 (extra_m > 0.0 ? " (map radius +100 m)" : "");
         const Registration reg(o.reg);
         std::vector<double> search_ms, total_ms, evals, lookups;
         int ok = 0, runs = 0;
@@ -381,11 +417,19 @@ int main(int argc, char** argv) {
           req.half_x_m = req.half_y_m = half;
           req.half_heading_rad = M_PI;
           ++runs;
+          ScanRecord rec;
+          rec.section = "global";
+          rec.window = name;
+          rec.scan = first[i].index;
+          rec.raw_points = static_cast<double>(first[i].points.size());
+          priorError(req.prior, first[i].truth, rec);
           RegistrationTiming timing;
           const double t0 = now();
           auto prepared = reg.prepare(gmap.value(), first[i].points, req);
           if (!prepared.ok()) {
             std::fprintf(stderr, "global scan %d: %s\n", first[i].index, prepared.error().c_str());
+            rec.failure = prepared.error();
+            records.push_back(rec);
             continue;
           }
           const double t1 = now();
@@ -395,6 +439,8 @@ int main(int argc, char** argv) {
           evals.push_back(static_cast<double>(g.best.stats.evaluations));
           lookups.push_back(static_cast<double>(g.point_lookups));
           poses = static_cast<double>(g.best.stats.exhaustive_poses);
+          rec.prepare_ms = (t1 - t0) * 1e3;
+          rec.search_ms = (t2 - t1) * 1e3;
           std::fprintf(stderr,
                        "global %.0f m scan %d: %s, %.0f ms, %lld evaluations, %lld heading / %lld "
                        "translation splits, %.1f M lookups, queue peak %lld\n",
@@ -405,36 +451,64 @@ int main(int argc, char** argv) {
                        static_cast<long long>(g.best.stats.queue_peak));
           if (!g.complete) {
             total_ms.push_back((now() - t0) * 1e3);
+            rec.total_ms = total_ms.back();
+            rec.failure = "global search stopped at its budget";
+            records.push_back(rec);
             continue;
           }
           auto r = reg.finish(gmap.value(), first[i].points, req, std::move(prepared.value()),
                               g.best, now, &timing);
           total_ms.push_back((now() - t0) * 1e3);
+          rec.total_ms = total_ms.back();
           if (!r.ok()) {
             std::fprintf(stderr, "global scan %d: %s\n", first[i].index, r.error().c_str());
+            rec.failure = r.error();
+            records.push_back(rec);
             continue;
           }
           const Pose6 t = fromIsometry(first[i].truth);
-          ok += success(std::hypot(r->pose.x - t.x, r->pose.y - t.y),
-                        std::abs(angleDiff(r->pose.yaw, t.yaw)) * 180.0 / M_PI);
+          rec.matched = true;
+          rec.error_m = std::hypot(r->pose.x - t.x, r->pose.y - t.y);
+          rec.error_deg = std::abs(angleDiff(r->pose.yaw, t.yaw)) * 180.0 / M_PI;
+          rec.success = success(rec.error_m, rec.error_deg);
+          rec.certified = r->certificate.certified ? 1 : 0;
+          ok += rec.success;
+          records.push_back(rec);
         }
-        std::printf(
+        out.print(
             "| %.0f m x %.0f m x 360 deg | %zu chunks, %.0f MB (radius %.0f m) | %d | %.1f | %.0f "
             "/ %.0f | %.0f / %.0f | %.0f | %.1f | %d/%d |\n",
             2 * half, 2 * half, gs.chunks, gs.bytes / 1e6, radius, runs, poses / 1e6,
             median(search_ms), percentile(search_ms, 100), median(total_ms),
             percentile(total_ms, 100), median(evals), median(lookups) / 1e6, ok, runs);
+        JsonObject g;
+        g.add("name", name)
+            .add("region_m", 2 * half)
+            .add("map_radius_m", radius)
+            .add("chunks", gs.chunks)
+            .add("scans", runs)
+            .add("success", ok)
+            .add("search_ms_median", median(search_ms))
+            .add("search_ms_max", percentile(search_ms, 100))
+            .add("match_total_ms_median", median(total_ms))
+            .add("evaluations_median", median(evals));
+        global_json.push_back(g);
       }
     }
+    summary.add("global", global_json);
   }
 
-  if (o.peer_count > 0 && !o.mapping_dir.empty()) {
-    std::printf("\n## Peers from the same offsets (within %.0f m, %.0f deg)\n\n", o.offset_m,
-                o.offset_deg);
-    std::printf("| matcher | scans | success <0.5 m, <1 deg | time per match ms median / p99 |\n");
-    std::printf("|---|---|---|---|\n");
+  if (with_peers) {
+    out.print("\n## Peers from the same offsets (within %g m, %g deg)\n\n", o.offset_m,
+              o.offset_deg);
+    out.print(
+        "Target clouds: %s (--peer-target-stride, --peer-target-exclude, "
+        "--peer-target-radius).\n\n",
+        describe(o.peer_target).c_str());
+    out.print("| matcher | scans | success <0.5 m, <1 deg | time per match ms median / p99 |\n");
+    out.print("|---|---|---|---|\n");
     PeerOptions po;
-    std::vector<PeerMatcher> peers;
+    std::vector<JsonObject> peer_json;
     for (auto kind : {PeerMatcher::Kind::kNdt, PeerMatcher::Kind::kGicp}) {
       PeerMatcher peer(kind, po);
       std::mt19937 rng(o.seed);  // the same offsets as the paper window above
@@ -443,7 +517,7 @@ int main(int argc, char** argv) {
       for (size_t i = 0; i < scans->size() && n < o.peer_count; ++i) {
         const BenchScan& s = scans.value()[i];
         const Pose6 prior = offsetPrior(s.truth, o.offset_m, o.offset_deg * M_PI / 180.0, rng);
-        auto target = targetCloud(o.mapping_dir, s.truth.translation(), 80.0, 0.5);
+        auto target = targetCloud(mapping, s.truth.translation(), s.index, o.peer_target);
         if (!target.ok()) {
           std::fprintf(stderr, "%s\n", target.error().c_str());
           continue;
@@ -455,25 +529,48 @@ int main(int argc, char** argv) {
         ok += success(e, eh);
         ++n;
         ms.push_back(r.seconds * 1e3);
+        ScanRecord rec;
+        rec.section = "peers";
+        rec.window = rows[0].name;
+        rec.matcher = peer.name();
+        rec.scan = s.index;
+        rec.raw_points = static_cast<double>(s.points.size());
+        priorError(prior, s.truth, rec);
+        rec.matched = r.pose.matrix().allFinite();
+        rec.error_m = e;
+        rec.error_deg = eh;
+        rec.success = success(e, eh);
+        rec.total_ms = r.seconds * 1e3;
+        if (!r.converged) rec.failure = "not converged";
+        records.push_back(rec);
       }
-      std::printf("| %s | %d | %d/%d (%.1f%%) | %.0f / %.0f |\n", peer.name().c_str(), n, ok, n,
-                  100.0 * ok / std::max(1, n), median(ms), percentile(ms, 99));
+      out.print("| %s | %d | %d/%d (%.1f%%) | %.0f / %.0f |\n", peer.name().c_str(), n, ok, n,
+                100.0 * ok / std::max(1, n), median(ms), percentile(ms, 99));
+      JsonObject p;
+      p.add("matcher", peer.name())
+          .add("scans", n)
+          .add("success", ok)
+          .add("ms_median", median(ms))
+          .add("ms_p99", percentile(ms, 99));
+      peer_json.push_back(p);
     }
-    std::printf("| gmm_localization (paper window, above) | %d | %d/%d (%.1f%%) | %.0f / %.0f |\n",
-                rows[0].runs, rows[0].success, rows[0].runs,
-                100.0 * rows[0].success / std::max(1, rows[0].runs), median(rows[0].total_ms),
-                percentile(rows[0].total_ms, 99));
+    out.print("| gmm_localization (paper window, above) | %d | %d/%d (%.1f%%) | %.0f / %.0f |\n",
+              rows[0].runs, rows[0].success, rows[0].runs,
+              100.0 * rows[0].success / std::max(1, rows[0].runs), median(rows[0].total_ms),
+              percentile(rows[0].total_ms, 99));
+    summary.add("peer_target", describe(o.peer_target)).add("peers", peer_json);
   }
 
   if (o.sizes) {
-    std::printf(
+    out.print(
         "\n## Scan size (raw points subsampled evenly, or padded with repeats of the scan's "
         "points)\n\n");
-    std::printf(
+    out.print(
         "| raw points | paper: prepare / search ms (median) | paper: filter + search ms median "
         "/ p99 | paper: match total ms (median) | tracking: filter + search ms median / p99 | "
         "tracking: match total ms (median) | success paper / tracking |\n");
-    std::printf("|---|---|---|---|---|---|---|\n");
+    out.print("|---|---|---|---|---|---|---|\n");
+    std::vector<JsonObject> size_json;
     for (size_t size : {20000, 70000, 140000, 280000}) {
       std::vector<BenchScan> sub;
       for (const BenchScan& s : scans.value()) {
@@ -492,18 +589,44 @@ int main(int argc, char** argv) {
         sub.push_back(std::move(c));
       }
       WindowRow paper, tracking;
-      Options os = o;
+      paper.name = rows[0].name;
+      tracking.name = rows[1].name;
+      BenchOptions os = o;
       os.exhaustive_every = 0;
-      runWindow(os, map.value(), sub, 12.5, 15.0, o.offset_m, o.offset_deg, paper);
-      runWindow(os, map.value(), sub, 2.0, 3.0, 1.5, 2.5, tracking);
-      std::printf(
-          "| %zu | %.1f / %.1f | %.1f / %.1f | %.1f | %.1f / %.1f | %.1f | %d/%d, %d/%d |\n", size,
-          median(paper.filter_ms), median(paper.search_ms), median(paper.filter_search_ms),
-          percentile(paper.filter_search_ms, 99), median(paper.total_ms),
-          median(tracking.filter_search_ms), percentile(tracking.filter_search_ms, 99),
-          median(tracking.total_ms), paper.success, paper.runs, tracking.success, tracking.runs);
+      const std::string section = "scan size " + std::to_string(size);
+      runWindow(os, map.value(), sub, 12.5, 15.0, o.offset_m, o.offset_deg, paper, section);
+      runWindow(os, map.value(), sub, 2.0, 3.0, o.track_offset_m, o.track_offset_deg, tracking,
+                section);
+      out.print("| %zu | %.1f / %.1f | %.1f / %.1f | %.1f | %.1f / %.1f | %.1f | %d/%d, %d/%d |\n",
+                size, median(paper.filter_ms), median(paper.search_ms),
+                median(paper.filter_search_ms), percentile(paper.filter_search_ms, 99),
+                median(paper.total_ms), median(tracking.filter_search_ms),
+                percentile(tracking.filter_search_ms, 99), median(tracking.total_ms), paper.success,
+                paper.runs, tracking.success, tracking.runs);
+      for (const WindowRow* r : {&paper, &tracking}) {
+        records.insert(records.end(), r->records.begin(), r->records.end());
+      }
+      JsonObject j;
+      j.add("raw_points", size)
+          .add("paper", windowJson(paper, 12.5, 15.0, o.offset_m, o.offset_deg))
+          .add("tracking", windowJson(tracking, 2.0, 3.0, o.track_offset_m, o.track_offset_deg));
+      size_json.push_back(j);
     }
+    summary.add("scan_sizes", size_json);
   }
-  std::printf("\nload average at the end (1 min): %s\n", loadAverage().c_str());
+  const std::string load_end = loadAverage();
+  out.print("\nload average at the end (1 min): %s\n", load_end.c_str());
+  summary.add("load_average_end", load_end);
+  if (!o.out_dir.empty()) {
+    const std::string csv = o.out_dir + "/scans.csv", md = o.out_dir + "/summary.md",
+                      json = o.out_dir + "/summary.json";
+    if (!writeScanCsv(records, csv) || !writeTextFile(md, out.text()) ||
+        !writeTextFile(json, summary.text())) {
+      std::fprintf(stderr, "cannot write the run's files in %s\n", o.out_dir.c_str());
+      return 1;
+    }
+    std::fprintf(stderr, "wrote %s (%zu rows), %s and %s\n", csv.c_str(), records.size(),
+                 md.c_str(), json.c_str());
+  }
   return 0;
 }

@@ -1,5 +1,6 @@
 // kitti_check: real-data checks on a KITTI-style keyframe dump (../shared/data/real/
-// kitti07_keyframes): what the Gaussian mixtures look like on real ground, walls and vegetation
+// kitti07_keyframes) or a KITTI odometry sequence (velodyne/ scans, poses, calib.txt): what the
+// Gaussian mixtures look like on real ground, walls and vegetation
 // (`cells`), and leave-one-out registration from random offsets by our search and by PCL NDT
 // and GICP (`register`). Prints markdown tables; see docs/real_data.md.
 
@@ -25,9 +26,18 @@ constexpr double kExampleRadiusM = 30.0;  // example cells come from near the ke
 void usage() {
   std::printf(
       "kitti_check cells|register --data DIR --work DIR [options]\n"
-      "  --data DIR        keyframes: DIR/NNNNNN/points.bin (float32 x,y,z, sensor frame) and\n"
-      "                    DIR/graph.txt ('vN x y z qx qy qz qw' sensor poses)\n"
+      "  --data DIR        keyframes, in a layout build_map --kitti takes:\n"
+      "                    DIR/NNNNNN/points.bin (keyframe dumps: float32 x,y,z) or\n"
+      "                    DIR/velodyne/NNNNNN.bin (KITTI: float32 x,y,z,intensity) or\n"
+      "                    DIR/NNNNNN.bin (layout from the file sizes), sensor frame; poses\n"
+      "                    DIR/graph.txt ('vN x y z qx qy qz qw' sensor poses), else\n"
+      "                    DIR/poses.txt (KITTI 3x4 rows); poses without a scan are skipped\n"
       "  --work DIR        maps and CSV files are written here (created)\n"
+      "  --point-format F  auto | xyz | xyzi: force the record layout (auto: as above; a size\n"
+      "                    that fits both is read as xyzi with a warning; the choice is printed)\n"
+      "  --poses FILE      the poses instead (e.g. KITTI's dataset/poses/07.txt)\n"
+      "  --kitti-calib FILE  KITTI odometry calib.txt: the poses are camera-0 poses; map frame =\n"
+      "                    first Velodyne frame (z up), as build_map --kitti-calib\n"
       "cells: map from every keyframe (WORK/map_all), each cell with data classed ground / wall /\n"
       "  vegetation / other / below ground from its points (kitti_check_cells.h); prints the\n"
       "  mixtures per class; writes\n"
@@ -46,7 +56,8 @@ void usage() {
 }
 
 struct Args {
-  std::string mode, data, work;
+  std::string mode, work;
+  KittiInput data;
   LooOptions loo;
 };
 
@@ -66,7 +77,18 @@ bool parse(int argc, char** argv, Args& a) {
     }
     const std::string v = argv[++i];
     if (k == "--data") {
-      a.data = v;
+      a.data.dir = v;
+    } else if (k == "--poses") {
+      a.data.poses_file = v;
+    } else if (k == "--kitti-calib") {
+      a.data.calib_file = v;
+    } else if (k == "--point-format") {
+      auto f = bench::parsePointFormat(v);
+      if (!f.ok()) {
+        std::fprintf(stderr, "--point-format: %s\n", f.error().c_str());
+        return false;
+      }
+      a.data.fields = f.value();
     } else if (k == "--work") {
       a.work = v;
     } else if (k == "--offsets") {
@@ -98,7 +120,7 @@ bool parse(int argc, char** argv, Args& a) {
       return false;
     }
   }
-  if (a.data.empty() || a.work.empty()) {
+  if (a.data.dir.empty() || a.work.empty()) {
     std::fprintf(stderr, "--data and --work are required\n");
     return false;
   }
@@ -113,13 +135,16 @@ std::string today() {
 }
 
 int runCells(const Args& a) {
-  auto keyframes = loadKeyframes(a.data);
-  if (!keyframes.ok()) {
-    std::fprintf(stderr, "%s\n", keyframes.error().c_str());
+  auto set = loadKeyframes(a.data);
+  if (!set.ok()) {
+    std::fprintf(stderr, "%s\n", set.error().c_str());
     return 1;
   }
+  const std::vector<Keyframe>& keyframes = set->keyframes;
+  noteData(set->data, stderr);
+  const std::string data_line = describeData(set->data);
   const std::string map_dir = a.work + "/map_all";
-  auto built = buildMap(a.data, {}, defaultMapOptions(map_dir));
+  auto built = buildMap(set->data, {}, defaultMapOptions(map_dir));
   if (!built.ok()) {
     std::fprintf(stderr, "%s\n", built.error().c_str());
     return 1;
@@ -130,7 +155,7 @@ int runCells(const Args& a) {
     std::fprintf(stderr, "%s\n", map.error().c_str());
     return 1;
   }
-  const PointList cloud = worldCloud(keyframes.value(), {}, 0.0);
+  const PointList cloud = worldCloud(keyframes, {}, 0.0);
   const PointLabels labels = classifyPoints(cloud, ClassifierOptions());
   const std::vector<CellRecord> cells = classifyCells(map.value(), cloud, labels);
   const MapBuildStats& s = built.value();
@@ -139,12 +164,13 @@ int runCells(const Args& a) {
   std::printf(
       "map %s from %zu keyframes of %s (%llu points; 0.2 m cells, K <= 2, build_map defaults): "
       "%llu cells with data, %.1f%% with 1 component, %.1f%% with 2\n\n",
-      map_dir.c_str(), keyframes->size(), a.data.c_str(),
+      map_dir.c_str(), keyframes.size(), a.data.dir.c_str(),
       static_cast<unsigned long long>(s.kept_points), static_cast<unsigned long long>(with_data),
       100.0 * s.cells_by_components[1] / std::max<uint64_t>(1, with_data),
       100.0 * s.cells_by_components[2] / std::max<uint64_t>(1, with_data));
+  std::printf("%s\n\n", data_line.c_str());
   std::vector<Eigen::Vector2d> centres;
-  for (const Keyframe& k : keyframes.value()) centres.push_back(k.truth.translation().head<2>());
+  for (const Keyframe& k : keyframes) centres.push_back(k.truth.translation().head<2>());
   const std::vector<size_t> examples = exampleCells(cells, centres, kExampleRadiusM);
   printCellTables(cells, examples, stdout);
   if (!writeCellsCsv(cells, examples, a.work + "/cells.csv", a.work + "/examples.csv")) {
@@ -162,15 +188,16 @@ int runCells(const Args& a) {
 }
 
 int runRegister(Args a) {
-  a.loo.data_dir = a.data;
+  a.loo.data = a.data;
   a.loo.work_dir = a.work;
   auto report = runLeaveOneOut(a.loo);
   if (!report.ok()) {
     std::fprintf(stderr, "%s\n", report.error().c_str());
     return 1;
   }
-  std::printf("# Leave-one-out registration of %s, %s, one thread\n\n", a.data.c_str(),
+  std::printf("# Leave-one-out registration of %s, %s, one thread\n\n", a.data.dir.c_str(),
               today().c_str());
+  std::printf("%s\n\n", describeData(report->data).c_str());
   std::printf(
       "%d seeded offsets (seed %u) per keyframe and window; priors keep the SLAM pose's z, roll "
       "and pitch (gravity from an IMU); errors against the SLAM poses; success: < 0.5 m and < 1 "

@@ -13,26 +13,39 @@ bool selected(const std::vector<int>& use, int index) {
 }
 }  // namespace
 
-Result<std::vector<Keyframe>> loadKeyframes(const std::string& dir) {
-  using R = Result<std::vector<Keyframe>>;
-  KittiSourceOptions o;
-  o.scans_directory = dir;
-  o.fields = KittiFields::kXyz;
-  auto source = KittiScanSource::open(o);
-  if (!source.ok()) return R::failure(source.error());
-  std::vector<Keyframe> out;
-  for (const KittiScanSource::Scan& s : source.value()->scans()) {
-    auto pts = readKittiScan(s.path, KittiFields::kXyz);
+Result<KeyframeSet> loadKeyframes(const KittiInput& input) {
+  using R = Result<KeyframeSet>;
+  auto data = bench::openKittiInput(input);
+  if (!data.ok()) return R::failure(data.error());
+  KeyframeSet out;
+  out.data = std::move(data.value());
+  for (const KittiScanSource::Scan& s : out.data.scans) {
+    auto pts = readKittiScan(s.path, out.data.source.fields);
     if (!pts.ok()) return R::failure(pts.error());
     Keyframe k;
     k.index = s.index;
     k.path = s.path;
     k.truth = s.map_T_sensor;
     k.points = std::move(pts.value());
-    out.push_back(std::move(k));
+    out.keyframes.push_back(std::move(k));
   }
-  if (out.empty()) return R::failure(dir + ": no keyframe with a pose and a scan");
+  if (out.keyframes.empty()) return R::failure(input.dir + ": no keyframe with a pose and a scan");
   return out;
+}
+
+std::string describeData(const KittiScans& d) {
+  std::string line = d.layout;
+  if (!d.missing.empty()) {
+    line +=
+        "; " + std::to_string(d.missing.size()) + " of " + std::to_string(d.poses) +
+        " poses have no scan file and are skipped (first: " + std::to_string(d.missing.front()) +
+        ")";
+  }
+  return line;
+}
+
+void noteData(const KittiScans& d, std::FILE* out) {
+  std::fprintf(out, "%s%s\n", d.ambiguous ? "warning: " : "", describeData(d).c_str());
 }
 
 MapBuilderOptions defaultMapOptions(const std::string& output_dir) {
@@ -44,13 +57,11 @@ MapBuilderOptions defaultMapOptions(const std::string& output_dir) {
   return o;
 }
 
-Result<MapBuildStats> buildMap(const std::string& dir, const std::vector<int>& use,
+Result<MapBuildStats> buildMap(const KittiScans& data, const std::vector<int>& use,
                                MapBuilderOptions options) {
   using R = Result<MapBuildStats>;
-  KittiSourceOptions k;
-  k.scans_directory = dir;
-  k.fields = KittiFields::kXyz;
-  k.scans = use;
+  KittiSourceOptions k = data.source;  // the layout, poses and calibration resolved
+  if (!use.empty()) k.scans = use;
   auto source = KittiScanSource::open(k);
   if (!source.ok()) return R::failure(source.error());
   options.provenance = "kitti_check from " + source.value()->describe();

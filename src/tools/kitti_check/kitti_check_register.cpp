@@ -124,13 +124,16 @@ void poseErrors(const Eigen::Isometry3d& pose, const Eigen::Isometry3d& truth, T
 
 Result<LooReport> runLeaveOneOut(const LooOptions& o) {
   using R = Result<LooReport>;
-  auto keyframes = loadKeyframes(o.data_dir);
-  if (!keyframes.ok()) return R::failure(keyframes.error());
+  auto set = loadKeyframes(o.data);
+  if (!set.ok()) return R::failure(set.error());
+  const auto& keyframes = set->keyframes;
+  noteData(set->data, stderr);
   const std::vector<WindowSpec> windows = o.windows.empty() ? defaultWindows() : o.windows;
   const Registration reg(o.registration);
   const Registration* ours = o.ours ? &reg : nullptr;
   LooReport report;
-  for (const Keyframe& k : keyframes.value()) {
+  report.data = set->data;
+  for (const Keyframe& k : keyframes) {
     if (!o.held_out.empty() &&
         std::find(o.held_out.begin(), o.held_out.end(), k.index) == o.held_out.end()) {
       continue;
@@ -138,7 +141,7 @@ Result<LooReport> runLeaveOneOut(const LooOptions& o) {
     Fold fold;
     fold.keyframe = k.index;
     fold.nearest_map_keyframe_m = 1e9;
-    for (const Keyframe& m : keyframes.value()) {
+    for (const Keyframe& m : keyframes) {
       if (m.index == k.index) continue;
       fold.map_keyframes.push_back(m.index);
       fold.nearest_map_keyframe_m =
@@ -146,7 +149,7 @@ Result<LooReport> runLeaveOneOut(const LooOptions& o) {
                    (m.truth.translation() - k.truth.translation()).head<2>().norm());
     }
     const std::string map_dir = o.work_dir + "/loo_" + std::to_string(k.index);
-    auto built = buildMap(o.data_dir, fold.map_keyframes, defaultMapOptions(map_dir));
+    auto built = buildMap(set->data, fold.map_keyframes, defaultMapOptions(map_dir));
     if (!built.ok()) return R::failure(built.error());
     auto store = MapStore::open(map_dir);
     if (!store.ok()) return R::failure(store.error());
@@ -160,8 +163,7 @@ Result<LooReport> runLeaveOneOut(const LooOptions& o) {
 
     std::vector<Peer> peers;
     if (o.peers) {
-      const PointList target =
-          worldCloud(keyframes.value(), fold.map_keyframes, o.peer_target_voxel_m);
+      const PointList target = worldCloud(keyframes, fold.map_keyframes, o.peer_target_voxel_m);
       for (auto kind : {bench::PeerMatcher::Kind::kNdt, bench::PeerMatcher::Kind::kGicp}) {
         Peer p;
         p.matcher = std::make_unique<bench::PeerMatcher>(kind, o.peer);

@@ -30,7 +30,7 @@ struct WindowSpec {
 };
 
 struct LooOptions {
-  std::string data_dir;
+  KittiInput data;            ///< the keyframes (loadKeyframes)
   std::string work_dir;       ///< maps are written to <work_dir>/loo_<index>
   std::vector<int> held_out;  ///< keyframes to register (empty: all)
   int offsets = 100;          ///< offsets per keyframe and window
@@ -81,6 +81,7 @@ struct Fold {
 struct LooReport {
   std::vector<Fold> folds;
   std::vector<Trial> trials;
+  KittiScans data;  ///< how the keyframes were read
 };
 
 /// Runs every fold; progress lines go to stderr. Fails on unreadable data or a map build error.

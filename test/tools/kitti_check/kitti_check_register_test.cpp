@@ -37,7 +37,7 @@ TEST(KittiCheckRegister, LeaveOneOutRecoversTheMiddleKeyframe) {
   const std::filesystem::path work =
       std::filesystem::temp_directory_path() / ("kitti_check_test_" + std::to_string(getpid()));
   LooOptions o;
-  o.data_dir = dir;
+  o.data.dir = dir;
   o.work_dir = work.string();
   o.held_out = {2};
   o.offsets = 3;

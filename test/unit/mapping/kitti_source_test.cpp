@@ -56,12 +56,16 @@ TEST(KittiSource, ReadsBothPoseFormatsAndLayouts) {
   EXPECT_TRUE(b.points_m[0].isApprox(Eigen::Vector3f(5.f, 1.f, 0.f)));  // rotated 90 deg
   EXPECT_FALSE(*(*src)->next(b));
 
-  // Keyframe layout: NNNNNN/points.bin (xyz) and graph lines with ids.
+  // Keyframe layout: NNNNNN/points.bin (xyz) and graph lines with ids. Scan 0 holds 4 points
+  // (48 bytes, ambiguous by size): as a points.bin it is read as xyz.
   TempDir k("gmm_kitti");
   for (int i : {0, 3}) {
     fs::create_directory(k.path + "/00000" + std::to_string(i));
     writeScan(k.path + "/00000" + std::to_string(i) + "/points.bin",
-              {{1.f, 0.f, 0.f, 0.f}, {2.f, 0.f, 0.f, 0.f}}, false);  // 24 bytes: xyz only
+              i == 0
+                  ? std::vector<std::array<float, 4>>(4, {1.f, 0.f, 0.f, 0.f})
+                  : std::vector<std::array<float, 4>>{{1.f, 0.f, 0.f, 0.f}, {2.f, 0.f, 0.f, 0.f}},
+              false);  // xyz only
   }
   std::ofstream(k.path + "/graph.txt") << "v0 0 0 0 0 0 0 1\nv3 1 2 3 0 0 0.7071068 0.7071068\n";
   KittiSourceOptions ko;
@@ -71,6 +75,7 @@ TEST(KittiSource, ReadsBothPoseFormatsAndLayouts) {
   ASSERT_EQ((*ks)->scans().size(), 2u);
   EXPECT_EQ((*ks)->scans()[1].index, 3);
   ASSERT_TRUE(*(*ks)->next(b));
+  EXPECT_EQ(b.points_m.size(), 4u);
   ASSERT_TRUE(*(*ks)->next(b));
   EXPECT_TRUE(b.points_m[1].isApprox(Eigen::Vector3f(1.f, 4.f, 3.f), 1e-5f));
   ko.scans = {3, 1};  // scan 1 has neither a pose nor a file

@@ -6,9 +6,10 @@
 // has a `velodyne/` subdirectory (a KITTI odometry sequence, the simulator's KITTI output) the
 // scans are read from there and the poses default to `<dir>/poses.txt`. Each is little-endian
 // float32 records, x y z intensity (xyzi, KITTI's format, 16 bytes) or x y z (xyz, 12 bytes), in
-// the sensor frame [m]. KittiFields::kAuto: scans under `velodyne/` are KITTI's xyzi; elsewhere
-// the file size decides: divisible by 16 only -> xyzi, by 12 only -> xyz; divisible by both (a
-// multiple of 48 bytes) is ambiguous and fails: pass the layout.
+// the sensor frame [m]. KittiFields::kAuto: scans under `velodyne/` are KITTI's xyzi,
+// `NNNNNN/points.bin` are the keyframe dumps' xyz; elsewhere (readKittiScan) the file size
+// decides: divisible by 16 only -> xyzi, by 12 only -> xyz; divisible by both (a multiple of
+// 48 bytes) is ambiguous and fails: pass the layout.
 //
 // Poses: one pose per scan, either
 //  - KITTI odometry: 12 numbers per line, the row-major 3x4 [R | t] of scan i on line i

@@ -1,0 +1,44 @@
+#pragma once
+// bench_registration's command line: the options, their defaults and --help.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "bench/bench_data.h"
+#include "gmm_localization/core/matching/registration.h"
+#include "gmm_localization/core/raster/raster_options.h"
+
+namespace gmm_localization {
+namespace bench {
+
+struct BenchOptions {
+  std::string map_dir;
+  KittiInput scans;     ///< --scans, --poses, --kitti-calib, --point-format
+  KittiInput mapping;   ///< --mapping, --mapping-poses, the same calibration and layout
+  std::string out_dir;  ///< --out: per-scan CSV and the summary (markdown, JSON); empty: none
+  int count = 30;
+  int exhaustive_every = 3;  ///< exhaustive reference on every n-th scan of each window
+  int peer_count = 20;
+  PeerTargetOptions peer_target;
+  uint32_t seed = 1;
+  double offset_m = 10.0, offset_deg = 15.0;            ///< paper window's offsets
+  double track_offset_m = 1.5, track_offset_deg = 2.5;  ///< tracking window's offsets
+  double raster_radius_m = 110.0;
+  bool sizes = true;
+  bool global = true;
+  int global_count = 10;
+  std::vector<double> global_regions_m = {25.0, 50.0, 100.0};
+  RegistrationOptions reg;
+  RasterOptions raster;
+};
+
+/// The --help text.
+const char* benchUsage();
+
+/// Parses argv into `o` (defaults as set by the caller). Returns false on --help or an error
+/// (the message on stderr); `help` is set for --help.
+bool parseBenchOptions(int argc, char** argv, BenchOptions& o, bool& help);
+
+}  // namespace bench
+}  // namespace gmm_localization
