@@ -13,7 +13,8 @@ add_library(gmm_map_readers STATIC
 set_target_properties(gmm_map_readers PROPERTIES POSITION_INDEPENDENT_CODE ON)
 target_include_directories(gmm_map_readers PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/src/tools)
 target_include_directories(gmm_map_readers SYSTEM PUBLIC ${catkin_INCLUDE_DIRS})
-target_link_libraries(gmm_map_readers PUBLIC gmm_core ${catkin_LIBRARIES})
+# gmm_ros: the rosbag reader reads clouds with the matcher's reader (ros/cloud_conversion.h).
+target_link_libraries(gmm_map_readers PUBLIC gmm_core gmm_ros ${catkin_LIBRARIES})
 
 gmm_add_tool(build_map SOURCES src/tools/build_map/build_map.cpp LIBS gmm_map_readers)
 gmm_add_tool(map_info SOURCES src/tools/map_info/map_info.cpp LIBS gmm_core)
@@ -23,6 +24,13 @@ if(CATKIN_ENABLE_TESTING)
   catkin_add_gtest(tools_build_map_readers_test test/tools/build_map/build_map_readers_test.cpp
     WORKING_DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR})
   target_link_libraries(tools_build_map_readers_test gmm_map_readers gtest_main)
+  # build_map --bag end to end: Ouster clouds, a /tf_static chain, poses from /tf.
+  catkin_add_gtest(tools_build_map_bag_test test/tools/build_map/build_map_bag_test.cpp
+    WORKING_DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR})
+  target_link_libraries(tools_build_map_bag_test gmm_map_readers gtest_main)
+  target_compile_definitions(tools_build_map_bag_test PRIVATE
+    GMM_BUILD_MAP_BINARY="$<TARGET_FILE:build_map>")
+  add_dependencies(tools_build_map_bag_test build_map)
   # build_map --overwrite killed with SIGKILL in both passes and in the swap, and run out of
   # space on a small tmpfs (skipped where mounting is not permitted): the old map survives.
   catkin_add_gtest(tools_build_map_overwrite_test test/tools/build_map/build_map_overwrite_test.cpp

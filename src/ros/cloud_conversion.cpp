@@ -1,5 +1,6 @@
 #include "gmm_localization/ros/cloud_conversion.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -96,9 +97,183 @@ std::string checkIntegerValue(const char* name, double v, double max, size_t poi
   return s.str();
 }
 
+const char* datatypeName(uint8_t datatype) {
+  switch (datatype) {
+    case PointField::INT8:
+      return "int8";
+    case PointField::UINT8:
+      return "uint8";
+    case PointField::INT16:
+      return "int16";
+    case PointField::UINT16:
+      return "uint16";
+    case PointField::INT32:
+      return "int32";
+    case PointField::UINT32:
+      return "uint32";
+    case PointField::FLOAT32:
+      return "float32";
+    case PointField::FLOAT64:
+      return "float64";
+    default:
+      return "unknown";
+  }
+}
+
+/// One way to read raw time values: t = raw * scale - offset_s [s after the stamp].
+struct TimeReading {
+  PointTimeKind kind;
+  double scale;
+  double offset_s;
+};
+
+std::string number(double v, int precision = 9) {
+  std::ostringstream s;
+  s.precision(precision);
+  s << v;
+  return s.str();
+}
+
 }  // namespace
 
-Result<CloudData> fromMsg(const sensor_msgs::PointCloud2& msg) {
+const char* const kPointTimeFields[3] = {"time", "t", "timestamp"};
+
+const char* pointTimeKindName(PointTimeKind kind) {
+  switch (kind) {
+    case PointTimeKind::kRelativeSeconds:
+      return "relative seconds";
+    case PointTimeKind::kRelativeNanoseconds:
+      return "relative nanoseconds";
+    case PointTimeKind::kAbsoluteSeconds:
+      return "absolute seconds";
+    case PointTimeKind::kAbsoluteNanoseconds:
+      return "absolute nanoseconds";
+    case PointTimeKind::kRefused:
+      return "refused";
+    default:
+      return "none";
+  }
+}
+
+const char* pointTimeFixHint() {
+  return "publish per-point times relative to header.stamp (float32 seconds 'time' or uint32 "
+         "nanoseconds 't') or absolute float64 times ('timestamp', seconds or nanoseconds since "
+         "the epoch) on the clock of header.stamp and within 1 s of it (check the driver's time "
+         "source and clock synchronisation, e.g. PTP)";
+}
+
+std::string describePointTimes(const CloudData& cloud) {
+  if (cloud.time_kind == PointTimeKind::kNone || cloud.time_kind == PointTimeKind::kRefused) {
+    return {};
+  }
+  return "'" + cloud.time_field + "' " + datatypeName(cloud.time_datatype) + " " +
+         pointTimeKindName(cloud.time_kind);
+}
+
+PointTimes interpretPointTimes(const std::string& field, uint8_t datatype,
+                               const std::vector<double>& raw, const std::vector<bool>& usable,
+                               const ros::Time& stamp) {
+  PointTimes out;
+  const std::string name = "per-point '" + field + "' (" + datatypeName(datatype) + ")";
+  auto refuse = [&](const std::string& why) {
+    out.kind = PointTimeKind::kRefused;
+    out.time_s.clear();
+    out.problem = name + " " + why;
+    return out;
+  };
+  const bool is_float = datatype == PointField::FLOAT32 || datatype == PointField::FLOAT64;
+  if (!is_float && typeSize(datatype) != 4) {
+    return refuse("has a unit that is unknown (1- and 2-byte integer times are not read)");
+  }
+  // The usable values' extremes; a usable point without a finite time refuses them all.
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  size_t n_usable = 0, n_nonfinite = 0;
+  for (size_t i = 0; i < raw.size(); ++i) {
+    if (!usable.empty() && !usable[i]) continue;
+    ++n_usable;
+    if (!std::isfinite(raw[i])) {
+      ++n_nonfinite;
+      continue;
+    }
+    lo = std::min(lo, raw[i]);
+    hi = std::max(hi, raw[i]);
+  }
+  if (n_nonfinite > 0) {
+    return refuse("is not finite for " + std::to_string(n_nonfinite) + " of the " +
+                  std::to_string(n_usable) + " points with finite coordinates");
+  }
+  const double stamp_s = stamp.toSec();
+  // The readings tried, in this order: for floats seconds after the stamp, or absolute seconds
+  // or nanoseconds; for integers nanoseconds after the stamp (Ouster). Float nanoseconds after
+  // the stamp are not tried: almost any garbage would pass as a few nanoseconds.
+  const TimeReading float_readings[3] = {{PointTimeKind::kRelativeSeconds, 1.0, 0.0},
+                                         {PointTimeKind::kAbsoluteSeconds, 1.0, stamp_s},
+                                         {PointTimeKind::kAbsoluteNanoseconds, 1e-9, stamp_s}};
+  const TimeReading integer_reading = {PointTimeKind::kRelativeNanoseconds, 1e-9, 0.0};
+  const TimeReading* const first = is_float ? float_readings : &integer_reading;
+  const TimeReading* const last = is_float ? float_readings + 3 : &integer_reading + 1;
+  // A point's time: the chosen reading of its raw value (non-finite stays NaN).
+  auto convert = [&](const TimeReading& r) {
+    out.kind = r.kind;
+    out.time_s.resize(raw.size());
+    for (size_t i = 0; i < raw.size(); ++i) {
+      out.time_s[i] = toFloat(raw[i] * r.scale - r.offset_s);
+    }
+    return out;
+  };
+  if (n_usable == 0) return convert(*first);  // no usable point: nothing to check
+  // Resolution of the datatype at the values' magnitude, in seconds once scaled.
+  const double magnitude = std::max(std::abs(lo), std::abs(hi));
+  const double epsilon =
+      datatype == PointField::FLOAT32 ? std::ldexp(1.0, -23) : std::ldexp(1.0, -52);
+  struct Fit {
+    double t_lo, t_hi, offset, quantum;
+    bool ok;
+  };
+  auto fit = [&](const TimeReading& r) {
+    Fit f;
+    f.t_lo = lo * r.scale - r.offset_s;
+    f.t_hi = hi * r.scale - r.offset_s;
+    f.offset = std::max(std::abs(f.t_lo), std::abs(f.t_hi));
+    f.quantum = is_float ? magnitude * epsilon * r.scale : r.scale;
+    f.ok = f.offset <= kMaxPointTimeOffsetS && f.t_hi - f.t_lo <= kMaxPointTimeSpanS &&
+           f.quantum <= kMaxPointTimeQuantumS;
+    return f;
+  };
+  if (is_float) {
+    // Relative and absolute seconds can both fit only for a stamp within a second of 0 (sim
+    // time): the reading nearer the stamp wins, relative on a tie.
+    const Fit rel = fit(float_readings[0]), abs_s = fit(float_readings[1]);
+    if (rel.ok && abs_s.ok) {
+      return convert(abs_s.offset < rel.offset ? float_readings[1] : float_readings[0]);
+    }
+  }
+  for (const TimeReading* r = first; r != last; ++r) {
+    if (fit(*r).ok) return convert(*r);
+  }
+  // Refused: explained with the reading that comes nearest to the stamp.
+  const TimeReading* best = first;
+  for (const TimeReading* r = first; r != last; ++r) {
+    if (fit(*r).offset < fit(*best).offset) best = r;
+  }
+  const Fit f = fit(*best);
+  std::string why = "makes no sense: values " + number(lo, 12) + " .. " + number(hi, 12) +
+                    " at stamp " + number(stamp_s, 13) + " s, read as " +
+                    pointTimeKindName(best->kind) + ", lie " + number(f.t_lo, 4) + " .. " +
+                    number(f.t_hi, 4) + " s from the stamp";
+  if (f.quantum > kMaxPointTimeQuantumS) {
+    why += ", in steps of " + number(f.quantum, 3) + " s (too coarse: use float64)";
+  } else if (f.offset <= kMaxPointTimeOffsetS) {
+    why += " (a span over " + number(kMaxPointTimeSpanS) + " s)";
+  } else {
+    why += " (more than " + number(kMaxPointTimeOffsetS) + " s away)";
+  }
+  return refuse(why + "; deskewing needs every time within " + number(kMaxPointTimeOffsetS) +
+                " s of the stamp, in s after it (float), ns after it (integer) or absolute s or ns "
+                "(float64)");
+}
+
+Result<CloudData> fromMsg(const sensor_msgs::PointCloud2& msg, const std::string& time_field) {
   using R = Result<CloudData>;
   if (msg.is_bigendian) return R::failure("big-endian clouds are not supported");
   const uint64_t n = static_cast<uint64_t>(msg.width) * msg.height;
@@ -124,17 +299,26 @@ Result<CloudData> fromMsg(const sensor_msgs::PointCloud2& msg) {
       return R::failure("field '" + f->name + "' must be float32 or float64");
     }
   }
-  const PointField* ft = findField(msg, "time");
-  if (ft == nullptr) ft = findField(msg, "t");
+  // The per-point time fields present, in the order they are tried.
+  std::vector<const PointField*> time_fields;
+  if (!time_field.empty()) {
+    if (const PointField* f = findField(msg, time_field)) time_fields.push_back(f);
+  } else {
+    for (const char* name : kPointTimeFields) {
+      if (const PointField* f = findField(msg, name)) time_fields.push_back(f);
+    }
+  }
   const PointField* fi = findField(msg, "intensity");
   const PointField* fr = findField(msg, "ring");
   const PointField* fl = findField(msg, "label");
-  for (const PointField* f : {fx, fy, fz, ft, fi, fr, fl}) {
+  for (const PointField* f : {fx, fy, fz, fi, fr, fl}) {
     const std::string e = checkField(f, msg.point_step);
     if (!e.empty()) return R::failure(e);
   }
-  // uint32 "t" is nanoseconds (Ouster); any float time is seconds.
-  const double time_scale = (ft != nullptr && ft->datatype == PointField::UINT32) ? 1e-9 : 1.0;
+  for (const PointField* f : time_fields) {
+    const std::string e = checkField(f, msg.point_step);
+    if (!e.empty()) return R::failure(e);
+  }
 
   CloudData out;
   // Width or height 0: the empty cloud, every channel empty (the callers' "0 points" case: the
@@ -151,7 +335,8 @@ Result<CloudData> fromMsg(const sensor_msgs::PointCloud2& msg) {
                       ", not height " + std::to_string(msg.height));
   }
   out.points.resize(n);
-  if (ft) out.time_s.resize(n);
+  // Raw time values (as double), interpreted once every point is read.
+  std::vector<std::vector<double>> raw_times(time_fields.size(), std::vector<double>(n));
   if (fi) out.intensity.resize(n);
   if (fr) out.ring.resize(n);
   if (fl) out.label.resize(n);
@@ -163,7 +348,9 @@ Result<CloudData> fromMsg(const sensor_msgs::PointCloud2& msg) {
       out.points[i] = Eigen::Vector3f(toFloat(readNumber(p + fx->offset, fx->datatype)),
                                       toFloat(readNumber(p + fy->offset, fy->datatype)),
                                       toFloat(readNumber(p + fz->offset, fz->datatype)));
-      if (ft) out.time_s[i] = toFloat(readNumber(p + ft->offset, ft->datatype) * time_scale);
+      for (size_t k = 0; k < time_fields.size(); ++k) {
+        raw_times[k][i] = readNumber(p + time_fields[k]->offset, time_fields[k]->datatype);
+      }
       if (fi) out.intensity[i] = toFloat(readNumber(p + fi->offset, fi->datatype));
       // Integer fields of any datatype: checked before the cast (a float -> integer cast of a
       // value out of range is undefined behaviour); fractions are truncated towards zero.
@@ -179,6 +366,31 @@ Result<CloudData> fromMsg(const sensor_msgs::PointCloud2& msg) {
         if (!e.empty()) return R::failure(e);
         out.label[i] = static_cast<uint8_t>(v);
       }
+    }
+  }
+  if (!time_fields.empty()) {
+    // The first field whose times make sense; when none does, the scan is not deskewed.
+    std::vector<bool> usable(n);
+    for (size_t j = 0; j < n; ++j) usable[j] = out.points[j].allFinite();
+    std::string problems;
+    for (size_t k = 0; k < time_fields.size(); ++k) {
+      PointTimes t = interpretPointTimes(time_fields[k]->name, time_fields[k]->datatype,
+                                         raw_times[k], usable, msg.header.stamp);
+      if (t.kind != PointTimeKind::kRefused) {
+        out.time_s = std::move(t.time_s);
+        out.time_field = time_fields[k]->name;
+        out.time_datatype = time_fields[k]->datatype;
+        out.time_kind = t.kind;
+        problems.clear();
+        break;
+      }
+      problems += (problems.empty() ? "" : "; ") + t.problem;
+    }
+    if (!problems.empty()) {
+      out.time_field = time_fields.front()->name;
+      out.time_datatype = time_fields.front()->datatype;
+      out.time_kind = PointTimeKind::kRefused;
+      out.time_problem = std::move(problems);
     }
   }
   return out;

@@ -97,6 +97,7 @@ void CloudMerger::onCloud(const sensor_msgs::PointCloud2::ConstPtr& msg, size_t 
   const double arrival_s = wallNow();
   Input& input = *inputs_[sensor];
   input.rate.tick();
+  input.rate.stamp(msg->header.stamp);
   auto data = fromMsg(*msg);
   std::lock_guard<std::mutex> lock(mutex_);
   ++input.received;
@@ -149,7 +150,8 @@ void CloudMerger::onPoll() {
 
 void CloudMerger::publish(const MergeCycle& cycle) {
   // Called with mutex_ held.
-  const CloudData merged = mergeCycle(cycle);
+  std::vector<UntimedInput> untimed;
+  const CloudData merged = mergeCycle(cycle, &untimed);
   auto msg = boost::make_shared<sensor_msgs::PointCloud2>();
   toMsg(merged, *msg);
   msg->header.stamp.fromNSec(static_cast<uint64_t>(cycle.stamp_ns));
@@ -164,6 +166,19 @@ void CloudMerger::publish(const MergeCycle& cycle) {
   last_latency_ms_ = (now_s - cycle.first_arrival_s) * 1e3;
   sum_latency_ms_ += last_latency_ms_;
   max_latency_ms_ = std::max(max_latency_ms_, last_latency_ms_);
+  if (!untimed.empty()) ++untimed_scans_;
+  for (const UntimedInput& u : untimed) {
+    if (u.sensor >= inputs_.size()) continue;
+    Input& input = *inputs_[u.sensor];
+    ++input.untimed;
+    input.last_time_problem = u.reason;
+    input.last_time_problem_s = now_s;
+    std::string what = u.reason +
+                       "; its points carry NaN times in the merged scan, which is therefore "
+                       "not deskewed";
+    if (u.refused) what += ". Driver fix: " + std::string(pointTimeFixHint());
+    warn(input, what);
+  }
   if (!cycle.missing.empty()) {
     last_missing_ = cycle.missing;
     last_missing_time_s_ = now_s;

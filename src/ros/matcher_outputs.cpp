@@ -46,6 +46,9 @@ void toStatusMsg(const MatchReport& r, const std::string& map_frame, double late
   msg.input_points = static_cast<uint32_t>(r.input_points);
   msg.dropped_nonfinite = static_cast<uint32_t>(r.dropped_nonfinite);
   msg.search_points = static_cast<uint32_t>(r.search_points);
+  msg.deskewed = r.deskewed;
+  msg.point_times = r.time_source;
+  msg.deskew_note = r.deskewed ? std::string() : r.deskew_note;
   msg.search_evaluations =
       r.has_result ? static_cast<uint64_t>(r.result.search.stats.evaluations) : 0;
   msg.search_fraction = r.has_result ? safe(r.result.search.stats.fraction()) : 0.0;

@@ -309,6 +309,246 @@ TEST(CloudConversion, Float64CoordinatesBeyondFloatRangeBecomeInfinite) {
   EXPECT_EQ(r->points[1].x(), 1.5f);
 }
 
+// --- Per-point times of other drivers (interpretPointTimes): relative or absolute, s or ns,
+// told apart by magnitude against the stamp; times that make no sense are refused (not
+// deskewed, with a reason), never used.
+
+const ros::Time kStamp(1700000000, 250000000);  // a 2023 stamp [s, ns]
+
+/// A cloud of n points along x with the given fields after x, y, z; time(i) written into
+/// `time_name` as `TimeT`.
+template <typename TimeT, typename F>
+PointCloud2 timedCloud(const std::vector<std::pair<std::string, uint8_t>>& extra,
+                       const std::string& time_name, size_t n, F time) {
+  std::vector<std::pair<std::string, uint8_t>> fields = {
+      {"x", PointField::FLOAT32}, {"y", PointField::FLOAT32}, {"z", PointField::FLOAT32}};
+  fields.insert(fields.end(), extra.begin(), extra.end());
+  PointCloud2 m = makeCloud(fields, static_cast<uint32_t>(n), 1);
+  m.header.stamp = kStamp;
+  for (size_t i = 0; i < n; ++i) {
+    put<float>(m, 0, i, "x", 1.0f + i);
+    put<TimeT>(m, 0, i, time_name, static_cast<TimeT>(time(i)));
+  }
+  return m;
+}
+
+TEST(CloudConversionTimes, HesaiAbsoluteFloat64SecondsAfterTheStamp) {
+  // HesaiLidar_ROS_2.0 PointXYZIT: x y z intensity, float64 timestamp [s since the epoch],
+  // uint16 ring; the stamp is the first point's time.
+  const double stamp = kStamp.toSec();
+  PointCloud2 m = timedCloud<double>({{"intensity", PointField::FLOAT32},
+                                      {"timestamp", PointField::FLOAT64},
+                                      {"ring", PointField::UINT16}},
+                                     "timestamp", 101, [&](size_t i) { return stamp + 1e-3 * i; });
+  auto c = fromMsg(m);
+  ASSERT_TRUE(c.ok()) << c.error();
+  ASSERT_EQ(c->time_kind, PointTimeKind::kAbsoluteSeconds);
+  EXPECT_EQ(c->time_field, "timestamp");
+  EXPECT_TRUE(c->time_problem.empty()) << c->time_problem;
+  EXPECT_EQ(describePointTimes(*c), "'timestamp' float64 absolute seconds");
+  ASSERT_EQ(c->time_s.size(), 101u);
+  for (size_t i = 0; i < 101; ++i) EXPECT_NEAR(c->time_s[i], 1e-3 * i, 1e-6) << i;
+}
+
+TEST(CloudConversionTimes, RoboSenseAbsoluteSecondsBeforeALastPointStamp) {
+  // rslidar_sdk PointXYZIRT: x y z, uint8 intensity, uint16 ring, float64 timestamp; by default
+  // the stamp is the last point's time, so every relative time is <= 0.
+  const double stamp = kStamp.toSec();
+  PointCloud2 m =
+      timedCloud<double>({{"intensity", PointField::UINT8},
+                          {"ring", PointField::UINT16},
+                          {"timestamp", PointField::FLOAT64}},
+                         "timestamp", 50, [&](size_t i) { return stamp - 0.1 + 0.1 * i / 49.0; });
+  auto c = fromMsg(m);
+  ASSERT_TRUE(c.ok()) << c.error();
+  ASSERT_EQ(c->time_kind, PointTimeKind::kAbsoluteSeconds);
+  EXPECT_NEAR(c->time_s.front(), -0.1, 1e-6);
+  EXPECT_NEAR(c->time_s.back(), 0.0, 1e-6);
+}
+
+TEST(CloudConversionTimes, LivoxAbsoluteFloat64Nanoseconds) {
+  // livox_ros_driver2 PointCloud2 (xfer_format 0): x y z intensity, uint8 tag and line, float64
+  // timestamp [ns since the epoch] at offset 18; the stamp is the packet's base time.
+  const double stamp_ns = 1e9 * kStamp.sec + kStamp.nsec;
+  PointCloud2 m = timedCloud<double>(
+      {{"intensity", PointField::FLOAT32},
+       {"tag", PointField::UINT8},
+       {"line", PointField::UINT8},
+       {"timestamp", PointField::FLOAT64}},
+      "timestamp", 40, [&](size_t i) { return stamp_ns + 2500000.0 * i; });  // 2.5 ms apart
+  ASSERT_EQ(field(m, "timestamp")->offset, 18u);
+  auto c = fromMsg(m);
+  ASSERT_TRUE(c.ok()) << c.error();
+  ASSERT_EQ(c->time_kind, PointTimeKind::kAbsoluteNanoseconds);
+  for (size_t i = 0; i < 40; ++i) EXPECT_NEAR(c->time_s[i], 2.5e-3 * i, 1e-6) << i;
+  // The same field holding nanoseconds after the stamp: refused (float nanoseconds after the
+  // stamp are not read, any garbage would pass as them).
+  m = timedCloud<double>({{"timestamp", PointField::FLOAT64}}, "timestamp", 40,
+                         [&](size_t i) { return 2500000.0 * i; });
+  c = fromMsg(m);
+  ASSERT_TRUE(c.ok());
+  EXPECT_EQ(c->time_kind, PointTimeKind::kRefused);
+}
+
+TEST(CloudConversionTimes, AbsoluteFloat64TimeIsNoLongerTakenAsRelative) {
+  // Before: deskewed by 1.7e9 s. Now: absolute seconds, converted to seconds after the stamp.
+  const double stamp = kStamp.toSec();
+  PointCloud2 m = timedCloud<double>({{"time", PointField::FLOAT64}}, "time", 10,
+                                     [&](size_t i) { return stamp + 0.01 * i - 0.05; });
+  auto c = fromMsg(m);
+  ASSERT_TRUE(c.ok());
+  ASSERT_EQ(c->time_kind, PointTimeKind::kAbsoluteSeconds);
+  EXPECT_NEAR(c->time_s[0], -0.05, 1e-6);
+  EXPECT_NEAR(c->time_s[9], 0.04, 1e-6);
+}
+
+TEST(CloudConversionTimes, VelodyneAndOusterTimesAtARealStampAreUnchanged) {
+  // velodyne_pointcloud: float32 `time` after the stamp, negative when the stamp is the end.
+  PointCloud2 m = timedCloud<float>({{"time", PointField::FLOAT32}}, "time", 11,
+                                    [](size_t i) { return -0.1f + 0.01f * i; });
+  auto c = fromMsg(m);
+  ASSERT_TRUE(c.ok());
+  ASSERT_EQ(c->time_kind, PointTimeKind::kRelativeSeconds);
+  EXPECT_EQ(describePointTimes(*c), "'time' float32 relative seconds");
+  for (size_t i = 0; i < 11; ++i) EXPECT_EQ(c->time_s[i], -0.1f + 0.01f * i);
+  // Ouster: uint32 `t` [ns after the stamp].
+  m = timedCloud<uint32_t>({{"t", PointField::UINT32}}, "t", 11,
+                           [](size_t i) { return 9000000u * i; });
+  c = fromMsg(m);
+  ASSERT_TRUE(c.ok());
+  ASSERT_EQ(c->time_kind, PointTimeKind::kRelativeNanoseconds);
+  EXPECT_NEAR(c->time_s[10], 0.09, 1e-8);
+  // No time field: nothing to say.
+  m = timedCloud<float>({{"intensity", PointField::FLOAT32}}, "intensity", 3,
+                        [](size_t) { return 1.f; });
+  c = fromMsg(m);
+  ASSERT_TRUE(c.ok());
+  EXPECT_EQ(c->time_kind, PointTimeKind::kNone);
+  EXPECT_TRUE(c->time_s.empty());
+  EXPECT_TRUE(c->time_problem.empty());
+  EXPECT_EQ(describePointTimes(*c), "");
+}
+
+/// fromMsg accepts the cloud but refuses its times, with a problem containing every `what`.
+void expectTimesRefused(const PointCloud2& m, const std::vector<std::string>& what) {
+  auto c = fromMsg(m);
+  ASSERT_TRUE(c.ok()) << c.error();
+  EXPECT_EQ(c->points.size(), size_t{m.width} * m.height);
+  EXPECT_EQ(c->time_kind, PointTimeKind::kRefused);
+  EXPECT_TRUE(c->time_s.empty());
+  for (const std::string& w : what) {
+    EXPECT_NE(c->time_problem.find(w), std::string::npos) << "'" << w << "' in " << c->time_problem;
+  }
+  EXPECT_EQ(describePointTimes(*c), "");
+}
+
+TEST(CloudConversionTimes, TimesThatMakeNoSenseAreRefusedWithAReason) {
+  // A LIDAR clock that is not the stamp's (seconds since the sensor booted).
+  expectTimesRefused(timedCloud<double>({{"timestamp", PointField::FLOAT64}}, "timestamp", 10,
+                                        [](size_t i) { return 1234.5 + 0.01 * i; }),
+                     {"per-point 'timestamp' (float64)", "makes no sense", "1234.5", "away"});
+  // Absolute, but 5 s before the stamp (a driver stamping with the receive time).
+  expectTimesRefused(timedCloud<double>({{"timestamp", PointField::FLOAT64}}, "timestamp", 10,
+                                        [](size_t i) { return kStamp.toSec() - 5.0 + 0.01 * i; }),
+                     {"read as absolute seconds", "more than 1 s away"});
+  // Within a second of the stamp but spanning 1.6 s.
+  expectTimesRefused(timedCloud<float>({{"time", PointField::FLOAT32}}, "time", 17,
+                                       [](size_t i) { return -0.8f + 0.1f * i; }),
+                     {"'time' (float32)", "a span over 1 s"});
+  // Ouster-like nanoseconds spanning 4 s.
+  expectTimesRefused(timedCloud<uint32_t>({{"t", PointField::UINT32}}, "t", 5,
+                                          [](size_t i) { return 1000000000u * i; }),
+                     {"'t' (uint32)"});
+  // Absolute seconds in float32: steps of 128 s cannot time a revolution.
+  expectTimesRefused(timedCloud<float>({{"time", PointField::FLOAT32}}, "time", 5,
+                                       [](size_t) { return static_cast<float>(1.7e9); }),
+                     {"too coarse"});
+  // A point with finite coordinates and a NaN time.
+  PointCloud2 m = timedCloud<double>({{"timestamp", PointField::FLOAT64}}, "timestamp", 6,
+                                     [](size_t) { return kStamp.toSec(); });
+  put<double>(m, 0, 3, "timestamp", std::numeric_limits<double>::quiet_NaN());
+  expectTimesRefused(m, {"not finite for 1 of the 6 points"});
+  // 1- and 2-byte integer times: the unit is unknown.
+  expectTimesRefused(
+      timedCloud<uint16_t>({{"time", PointField::UINT16}}, "time", 3, [](size_t i) { return i; }),
+      {"'time' (uint16)", "unit"});
+}
+
+TEST(CloudConversionTimes, NonFinitePointsTimesAreIgnored) {
+  // Organised clouds mark missing returns with NaN coordinates; their times do not count.
+  PointCloud2 m = timedCloud<double>({{"timestamp", PointField::FLOAT64}}, "timestamp", 4,
+                                     [](size_t i) { return kStamp.toSec() + 0.01 * i; });
+  put<float>(m, 0, 1, "x", std::numeric_limits<float>::quiet_NaN());
+  put<double>(m, 0, 1, "timestamp", std::numeric_limits<double>::quiet_NaN());
+  put<float>(m, 0, 2, "y", std::numeric_limits<float>::infinity());
+  put<double>(m, 0, 2, "timestamp", 0.0);  // garbage, but the point is dropped anyway
+  auto c = fromMsg(m);
+  ASSERT_TRUE(c.ok());
+  ASSERT_EQ(c->time_kind, PointTimeKind::kAbsoluteSeconds);
+  EXPECT_NEAR(c->time_s[3], 0.03, 1e-6);
+  EXPECT_TRUE(std::isnan(c->time_s[1]));
+  // No usable point at all: converted as the first reading, nothing to check.
+  const PointTimes t =
+      interpretPointTimes("time", PointField::FLOAT32, {5.0, 7.0}, {false, false}, kStamp);
+  ASSERT_EQ(t.kind, PointTimeKind::kRelativeSeconds);
+  EXPECT_EQ(t.time_s, (std::vector<float>{5.f, 7.f}));
+}
+
+TEST(CloudConversionTimes, TheFirstFieldThatMakesSenseIsUsed) {
+  // `time` garbage, `timestamp` absolute: the timestamp is used, nothing is refused.
+  PointCloud2 m =
+      timedCloud<float>({{"time", PointField::FLOAT32}, {"timestamp", PointField::FLOAT64}}, "time",
+                        5, [](size_t) { return 99.f; });
+  for (size_t i = 0; i < 5; ++i) put<double>(m, 0, i, "timestamp", kStamp.toSec() + 0.02 * i);
+  auto c = fromMsg(m);
+  ASSERT_TRUE(c.ok());
+  EXPECT_EQ(c->time_field, "timestamp");
+  ASSERT_EQ(c->time_kind, PointTimeKind::kAbsoluteSeconds);
+  EXPECT_TRUE(c->time_problem.empty());
+  EXPECT_NEAR(c->time_s[4], 0.08, 1e-6);
+  // Both make sense: `time` comes first.
+  for (size_t i = 0; i < 5; ++i) put<float>(m, 0, i, "time", 0.01f * i);
+  c = fromMsg(m);
+  ASSERT_EQ(c->time_field, "time");
+  ASSERT_EQ(c->time_s.size(), 5u);
+  EXPECT_NEAR(c->time_s[4], 0.04, 1e-7);
+  // A named field only: the other is not looked at.
+  c = fromMsg(m, "timestamp");
+  EXPECT_EQ(c->time_field, "timestamp");
+  c = fromMsg(m, "no_such_field");
+  EXPECT_EQ(c->time_kind, PointTimeKind::kNone);
+  EXPECT_TRUE(c->time_s.empty());
+  // Neither makes sense: both reasons, the first field named.
+  for (size_t i = 0; i < 5; ++i) put<double>(m, 0, i, "timestamp", 3.0);
+  for (size_t i = 0; i < 5; ++i) put<float>(m, 0, i, "time", 99.f);
+  c = fromMsg(m);
+  ASSERT_TRUE(c.ok());
+  EXPECT_EQ(c->time_kind, PointTimeKind::kRefused);
+  ASSERT_EQ(c->time_field, "time");
+  EXPECT_NE(c->time_problem.find("'time'"), std::string::npos);
+  EXPECT_NE(c->time_problem.find("; per-point 'timestamp'"), std::string::npos) << c->time_problem;
+}
+
+TEST(CloudConversionTimes, NearAZeroStampTheNearerReadingWins) {
+  // Sim time: a stamp of 0.5 s. Absolute seconds around it are nearer as absolute...
+  const ros::Time stamp(0, 500000000);
+  PointTimes t = interpretPointTimes("time", PointField::FLOAT64, {0.45, 0.5, 0.55}, {}, stamp);
+  ASSERT_EQ(t.kind, PointTimeKind::kAbsoluteSeconds);
+  EXPECT_NEAR(t.time_s[0], -0.05, 1e-7);
+  // ... relative times (a revolution ending at the stamp) stay relative ...
+  t = interpretPointTimes("time", PointField::FLOAT32, {-0.1, -0.05, 0.0}, {}, stamp);
+  ASSERT_EQ(t.kind, PointTimeKind::kRelativeSeconds);
+  EXPECT_NEAR(t.time_s[0], -0.1, 1e-7);
+  // ... and a tie is relative (the stamp 0 of a cloud written by toMsg).
+  t = interpretPointTimes("time", PointField::FLOAT32, {0.0, 0.01}, {}, ros::Time());
+  ASSERT_EQ(t.kind, PointTimeKind::kRelativeSeconds);
+  // Sim time in nanoseconds: 100 s.
+  t = interpretPointTimes("timestamp", PointField::FLOAT64, {100e9, 100.05e9}, {},
+                          ros::Time(100, 0));
+  ASSERT_EQ(t.kind, PointTimeKind::kAbsoluteNanoseconds);
+  EXPECT_NEAR(t.time_s[1], 0.05, 1e-7);
+}
+
 }  // namespace
 }  // namespace node
 }  // namespace gmm_localization

@@ -4,11 +4,15 @@
 #include "gmm_localization/ros/matcher_outputs.h"
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include <gtest/gtest.h>
 #include <sensor_msgs/image_encodings.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
+
+#include "../unit/support/corridor_map.h"
+#include "gmm_localization/ros/cloud_conversion.h"
 
 namespace gmm_localization {
 namespace node {
@@ -158,6 +162,96 @@ TEST(MatcherOutputs, TraversalImage) {
   EXPECT_EQ(img.height, 2u * 5u + 2u);
   EXPECT_EQ(img.step, 15u);
   EXPECT_EQ(img.data.size(), img.step * img.height);
+}
+
+TEST(MatcherOutputs, StatusSaysWhetherTheScanWasDeskewed) {
+  MatchReport r = acceptedReport();
+  r.deskewed = true;
+  r.time_source = "'t' uint32 relative nanoseconds";
+  MatchStatus s;
+  toStatusMsg(r, "map", 0.0, 0, s);
+  EXPECT_TRUE(s.deskewed);
+  EXPECT_EQ(s.point_times, "'t' uint32 relative nanoseconds");
+  EXPECT_EQ(s.deskew_note, "");
+  r.deskewed = false;
+  r.deskew_note = "no twist";
+  toStatusMsg(r, "map", 0.0, 0, s);
+  EXPECT_FALSE(s.deskewed);
+  EXPECT_EQ(s.deskew_note, "no twist");
+}
+
+/// A Hesai-like cloud (float64 `timestamp`, absolute seconds) of the corridor's walls, stamped
+/// 1700000000.5, the i-th of n points at stamp + time(i).
+template <typename F>
+sensor_msgs::PointCloud2 hesaiCloud(F time) {
+  const PointList wall = testing::corridorScan();
+  sensor_msgs::PointCloud2 m;
+  m.header.stamp = ros::Time(1700000000, 500000000);
+  m.header.frame_id = "base_link";
+  sensor_msgs::PointCloud2Modifier mod(m);
+  mod.setPointCloud2Fields(
+      4, "x", 1, sensor_msgs::PointField::FLOAT32, "y", 1, sensor_msgs::PointField::FLOAT32, "z", 1,
+      sensor_msgs::PointField::FLOAT32, "timestamp", 1, sensor_msgs::PointField::FLOAT64);
+  mod.resize(wall.size());
+  sensor_msgs::PointCloud2Iterator<float> x(m, "x");
+  sensor_msgs::PointCloud2Iterator<double> t(m, "timestamp");
+  for (size_t i = 0; i < wall.size(); ++i, ++x, ++t) {
+    x[0] = wall[i].x(), x[1] = wall[i].y(), x[2] = wall[i].z();
+    *t = m.header.stamp.toSec() + time(i, wall.size());
+  }
+  return m;
+}
+
+/// The status of matching `cloud` (read by the matcher's reader) on the corridor from a
+/// configured prior at the origin, with `twist` (null: none).
+MatchStatus statusOf(const sensor_msgs::PointCloud2& cloud, const BodyTwist* twist) {
+  auto data = fromMsg(cloud);
+  EXPECT_TRUE(data.ok()) << data.error();
+  ScanInput scan;
+  scan.stamp_s = cloud.header.stamp.toSec();
+  scan.points = data->points;
+  scan.time_s = data->time_s;
+  scan.time_source = describePointTimes(*data);
+  scan.time_problem = data->time_problem;
+  auto processor = MatchProcessor::create(RegistrationOptions(), LocalizationPolicyOptions());
+  EXPECT_TRUE(processor.ok()) << processor.error();
+  static const ChunkMap map = testing::corridorChunks();
+  Prior prior;
+  prior.source = PriorSource::kConfigured;
+  const MatchReport report = processor->process(map, std::move(scan), prior, twist, false);
+  MatchStatus s;
+  toStatusMsg(report, "map", 0.0, 0, s);
+  return s;
+}
+
+TEST(MatcherOutputs, AbsoluteDriverTimesAreDeskewedAndGarbageIsNot) {
+  BodyTwist twist;
+  twist.linear_mps.x() = 10.0;
+  // Hesai: absolute seconds over 0.1 s after the stamp.
+  auto revolution = [](size_t i, size_t n) { return 0.1 * i / n; };
+  MatchStatus s = statusOf(hesaiCloud(revolution), &twist);
+  EXPECT_TRUE(s.deskewed);
+  EXPECT_EQ(s.point_times, "'timestamp' float64 absolute seconds");
+  EXPECT_EQ(s.deskew_note, "");
+  // The same cloud without a twist: not deskewed, and why.
+  s = statusOf(hesaiCloud(revolution), nullptr);
+  EXPECT_FALSE(s.deskewed);
+  EXPECT_EQ(s.point_times, "'timestamp' float64 absolute seconds");
+  EXPECT_NE(s.deskew_note.find("no twist"), std::string::npos) << s.deskew_note;
+  // Times on another clock (the LIDAR's, since boot): refused, the scan matched undeskewed.
+  s = statusOf(hesaiCloud([](size_t i, size_t n) { return 1234.5 - 1700000000.5 + 0.1 * i / n; }),
+               &twist);
+  EXPECT_FALSE(s.deskewed);
+  EXPECT_EQ(s.point_times, "");
+  EXPECT_NE(s.deskew_note.find("per-point 'timestamp' (float64) makes no sense"), std::string::npos)
+      << s.deskew_note;
+  EXPECT_GT(s.search_points, 0u);  // matched all the same
+  // No time field at all.
+  sensor_msgs::PointCloud2 plain = hesaiCloud(revolution);
+  plain.fields.pop_back();
+  s = statusOf(plain, &twist);
+  EXPECT_FALSE(s.deskewed);
+  EXPECT_NE(s.deskew_note.find("no per-point time field"), std::string::npos) << s.deskew_note;
 }
 
 }  // namespace

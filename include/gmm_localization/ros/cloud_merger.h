@@ -4,10 +4,15 @@
 //
 // Topics (relative; remap in launch):
 //   <input_topics[i]>  sensor_msgs/PointCloud2 from sensor i, in its own frame (velodyne_i).
-//   velodyne_points    sensor_msgs/PointCloud2 in output_frame, dense (no NaN), stamped with
-//                      the earliest input stamp of its set; fields x y z, then intensity, time
-//                      [s, relative to the stamp], ring, label where the inputs have them
-//                      (cloud_merger_assembly.h).
+//   velodyne_points    sensor_msgs/PointCloud2 in output_frame, dense (no non-finite point),
+//                      stamped with the earliest input stamp of its set; fields x y z, then
+//                      intensity, time [s, relative to the stamp], ring, label where the
+//                      inputs have them (cloud_merger_assembly.h). The points of a sensor
+//                      whose per-point times the reader refuses (or which has none while
+//                      another sensor has some) get NaN times, so the matcher refuses the
+//                      scan's times ("not finite") and does not deskew it; a throttled warning
+//                      names the sensor and the reader's reason, and the input's diagnostics
+//                      count such clouds.
 // Synchronisation: cloud_merger_sync.h (a set = one revolution per sensor; published when all
 // have arrived, after max_wait_s, or when the next set begins; late clouds dropped; time going
 // backwards resets).
@@ -18,7 +23,8 @@
 // Malformed clouds (node::fromMsg of a cloud: missing x/y/z, sizes that disagree, unsupported
 // types, big-endian) are dropped with a throttled warning and a diagnostic naming the reason.
 // Diagnostics: per input (rate, clouds, malformed, no TF, late, out of window, non-finite points
-// dropped), output (rate, complete / incomplete sets, missing sensors, merge latency, resets).
+// dropped, clouds merged without valid per-point times and why), output (rate, complete /
+// incomplete sets, missing sensors, scans with NaN point times, merge latency, resets).
 
 #include <memory>
 #include <mutex>
@@ -57,6 +63,9 @@ class CloudMerger {
     FrequencyMonitor rate;
     uint64_t received = 0, malformed = 0, no_tf = 0, late = 0, out_of_window = 0;
     uint64_t nonfinite_points = 0;
+    uint64_t untimed = 0;                        ///< clouds merged with NaN times (refused or none)
+    std::string last_time_problem;               ///< why, for the last of them
+    double last_time_problem_s = -1e9;           ///< wall time of last_time_problem [s]
     std::string last_error;                      ///< the last malformed-cloud or TF problem
     double last_error_time_s = -1e9;             ///< wall time of last_error [s]
     double last_log_s = -1e9;                    ///< wall time of the last warning logged [s]
@@ -89,6 +98,7 @@ class CloudMerger {
   MergeSynchronizer sync_;
   FrequencyMonitor output_rate_;
   uint64_t published_ = 0;
+  uint64_t untimed_scans_ = 0;  // scans published with NaN point times for some sensor
   std::vector<size_t> last_missing_;
   double last_missing_time_s_ = -1e9;  // wall time of the last incomplete set [s]
   double last_latency_ms_ = 0.0, sum_latency_ms_ = 0.0, max_latency_ms_ = 0.0;

@@ -42,6 +42,18 @@ MatchReport MatchProcessor::process(const ChunkMap& map, ScanInput scan, const P
   size_t finite = 0;
   for (const Eigen::Vector3f& p : scan.points) finite += p.allFinite() ? 1 : 0;
   r.dropped_nonfinite = r.input_points - finite;
+  r.time_source = scan.time_source;
+  // Why the scan is not deskewed, unless it is (cleared then).
+  if (scan.time_s.empty()) {
+    r.deskew_note = !scan.time_problem.empty()
+                        ? scan.time_problem
+                        : "the cloud has no per-point time field ('time', 't' or 'timestamp')";
+  } else if (twist == nullptr) {
+    r.deskew_note =
+        "no twist: deskew off, or no INS twist within deskew_twist_max_gap_s of mid-scan";
+  } else {
+    r.deskew_note = "scan skipped before deskewing";
+  }
   auto finish = [&](MatchOutcome outcome, std::string reason) {
     r.outcome = outcome;
     r.reason = std::move(reason);
@@ -66,6 +78,9 @@ MatchReport MatchProcessor::process(const ChunkMap& map, ScanInput scan, const P
   if (twist != nullptr && !scan.time_s.empty()) {
     if (deskew(scan.points, scan.time_s, twist->linear_mps, twist->angular_radps)) {
       r.deskewed = true;
+      r.deskew_note.clear();
+    } else {
+      r.deskew_note = "per-point times and points differ in number";
     }
   }
 

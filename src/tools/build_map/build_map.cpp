@@ -54,6 +54,8 @@ Result<std::unique_ptr<PointBatchSource>> openSource(const BuildMapConfig& c) {
       b.path = c.bag.path;
       b.cloud_topic = c.bag.cloud_topic;
       b.pose_topic = c.bag.pose_topic;
+      b.pose_tf_parent = c.bag.pose_tf_parent;
+      b.pose_tf_child = c.bag.pose_tf_child;
       b.has_extrinsic = c.bag.has_extrinsic;
       b.pose_T_cloud = c.bag.pose_T_cloud;
       b.map_T_world = map_T_world;

@@ -59,13 +59,20 @@ Input (exactly one kind):
     --pose-topic T         nav_msgs/Odometry, geometry_msgs/PoseStamped or
                            PoseWithCovarianceStamped, interpolated to each scan's stamp
                            (/ground_truth/odom)
+    --pose-tf PARENT,CHILD instead of a pose topic: the poses of CHILD in PARENT from /tf
+                           (e.g. map,base_link; chains such as map -> odom -> base_link and
+                           /tf_static edges are composed)
     --extrinsic X,Y,Z,ROLL,PITCH,YAW   or X,Y,Z,QX,QY,QZ,QW: the cloud frame in the pose's
-                           child frame [m, deg]. Default: /tf_static's edge between the two
-                           frames if the bag has it, identity if the frames are equal.
+                           child frame [m, deg]. Default: composed from /tf_static (any chain
+                           of static transforms between the two frames), identity if the
+                           frames are equal.
     --max-pose-gap S       skip scans whose bracketing poses are further apart (0.25 s)
     --every N              use every N-th scan (1)
-    --time-field NAME      per-point time [s after the stamp] used to deskew each scan with
-                           the interpolated poses (time); clouds without it are not deskewed
+    --time-field NAME      the per-point time used to deskew each scan with the interpolated
+                           poses. Default: the matcher's reader's choice of time, t and
+                           timestamp (velodyne, Ouster, Hesai, RoboSense, Livox; relative or
+                           absolute, s or ns). Clouds without times, or with times that make
+                           no sense (counted), are not deskewed
     --no-deskew            ignore per-point times
   --synthetic-street M     a generated straight street of M metres (facades, parked cars,
                            trees, poles, awnings) scanned by a simulated 32-laser LIDAR
@@ -186,6 +193,7 @@ Result<BuildMapConfig> parseBuildMapArgs(int argc, char** argv) {
   BuildMapConfig c;
   MapBuilderOptions& b = c.builder;
   std::string error;
+  bool pose_topic_given = false;
   auto setInput = [&](InputKind k, const std::string& opt) {
     const bool more_pcd = k == InputKind::kPcd && c.input == InputKind::kPcd;
     if (c.input != InputKind::kNone && !more_pcd) error = opt + ": give exactly one input";
@@ -275,7 +283,22 @@ Result<BuildMapConfig> parseBuildMapArgs(int argc, char** argv) {
          c.bag.path = v;
        }},
       {"--cloud-topic", str(c.bag.cloud_topic)},
-      {"--pose-topic", str(c.bag.pose_topic)},
+      {"--pose-topic",
+       [&](const std::string&, const std::string& v) {
+         c.bag.pose_topic = v;
+         pose_topic_given = true;
+       }},
+      {"--pose-tf",
+       [&](const std::string& o, const std::string& v) {
+         const size_t comma = v.find(',');
+         if (comma == std::string::npos || comma == 0 || comma + 1 == v.size() ||
+             v.find(',', comma + 1) != std::string::npos) {
+           error = o + " needs PARENT,CHILD (two frame ids), got '" + v + "'";
+           return;
+         }
+         c.bag.pose_tf_parent = v.substr(0, comma);
+         c.bag.pose_tf_child = v.substr(comma + 1);
+       }},
       {"--extrinsic",
        [&](const std::string& o, const std::string& v) {
          auto t = parseTransform(o, v);
@@ -378,6 +401,9 @@ Result<BuildMapConfig> parseBuildMapArgs(int argc, char** argv) {
     return R::failure(pcd_only + " applies to --pcd input only");
   if (!(c.pcd_max_abs_z_m > 0.0)) return R::failure("--max-abs-z must be > 0");
   if (c.bag.every < 1) return R::failure("--every must be >= 1");
+  if (pose_topic_given && !c.bag.pose_tf_child.empty()) {
+    return R::failure("--pose-topic and --pose-tf: give one source of poses");
+  }
   if (!(c.bag.max_pose_gap_s > 0.0)) return R::failure("--max-pose-gap must be > 0");
   if (!(c.synthetic.length_m >= 10.0 && c.synthetic.length_m <= 100000.0)) {
     return R::failure("--synthetic-street must be in [10, 100000] m");

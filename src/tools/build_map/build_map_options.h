@@ -19,12 +19,13 @@ struct BagInputOptions {
   std::string path;
   std::string cloud_topic = "/velodyne_points";
   std::string pose_topic = "/ground_truth/odom";
+  std::string pose_tf_parent, pose_tf_child;  ///< --pose-tf PARENT,CHILD: poses from /tf
   bool has_extrinsic = false;
   Eigen::Isometry3d pose_T_cloud = Eigen::Isometry3d::Identity();  ///< --extrinsic
   double max_pose_gap_s = 0.25;  ///< refuse to interpolate across a longer gap
   int every = 1;                 ///< use every N-th scan
-  bool deskew = true;            ///< use the per-point time field when present
-  std::string time_field = "time";
+  bool deskew = true;            ///< use the per-point times when present
+  std::string time_field;        ///< --time-field: the only one looked at (empty: any known)
 };
 
 struct SyntheticStreetOptions {

@@ -65,31 +65,42 @@ class PcdSource : public PointBatchSource {
 struct RosbagSourceOptions {
   std::string path;
   std::string cloud_topic = "/velodyne_points";
+  /// nav_msgs/Odometry, geometry_msgs/PoseStamped or PoseWithCovarianceStamped (ignored when
+  /// pose_tf_child is set).
   std::string pose_topic = "/ground_truth/odom";
-  /// The cloud frame in the pose's child frame. Unset: looked up in /tf_static (a direct edge
-  /// between the two frames), identity when the frame ids are equal or the pose type has no
-  /// child frame (PoseStamped), else open() fails naming both frames.
+  /// Set: the poses are those of pose_tf_child in pose_tf_parent from the bag's /tf (composed
+  /// through the TF tree with /tf_static, e.g. map -> odom -> base_link), looked up at every
+  /// stamp of a /tf transform on that chain.
+  std::string pose_tf_parent;
+  std::string pose_tf_child;
+  /// The cloud frame in the pose's child frame. Unset: composed from /tf_static (any chain of
+  /// static transforms between the two frames, in either direction), identity when the frame
+  /// ids are equal or the pose type has no child frame (PoseStamped), else next() fails naming
+  /// both frames.
   bool has_extrinsic = false;
   Eigen::Isometry3d pose_T_cloud = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d map_T_world = Eigen::Isometry3d::Identity();  ///< left-multiplies poses
   double max_pose_gap_s = 0.25;
   int every = 1;
-  /// Deskew (motion-compensate) scans whose clouds carry a per-point time field: each point is
-  /// moved with the pose interpolated at header.stamp + time (time in seconds relative to the
-  /// stamp, FLOAT32/FLOAT64, the Velodyne driver's and the simulator's convention; resolved to
-  /// 1 ms). Clouds without the field are used as they are.
+  /// Deskew (motion-compensate) scans whose clouds carry per-point times: each point is moved
+  /// with the pose interpolated at header.stamp + its time (resolved to 1 ms). The clouds are
+  /// read by the matcher's reader (ros/cloud_conversion.h), so every time field it knows
+  /// works: velodyne `time`, Ouster `t`, Hesai, RoboSense and Livox `timestamp`, relative or
+  /// absolute. Clouds without times, or with times that make no sense, are used as they are
+  /// (counted in skipped()).
   bool deskew = true;
-  std::string time_field = "time";
+  /// The only time field looked at; empty: the reader's (time, t, timestamp).
+  std::string time_field;
 };
 
-/// A rosbag with sensor_msgs/PointCloud2 scans and a pose topic (nav_msgs/Odometry,
-/// geometry_msgs/PoseStamped or PoseWithCovarianceStamped). Each scan's pose is interpolated
-/// at its header stamp (linear in position, slerp in rotation) between the two poses around it.
-/// With a per-point time field the scan is deskewed (see RosbagSourceOptions::deskew). The
-/// batch's sensor origin is the sensor's position at the stamp (used by the range filter).
+/// A rosbag with sensor_msgs/PointCloud2 scans and their poses: a pose topic (nav_msgs/Odometry,
+/// geometry_msgs/PoseStamped or PoseWithCovarianceStamped) or /tf. Each scan's pose is
+/// interpolated at its header stamp (linear in position, slerp in rotation) between the two
+/// poses around it. With per-point times the scan is deskewed (see RosbagSourceOptions::deskew).
+/// The batch's sensor origin is the sensor's position at the stamp (used by the range filter).
 /// Scans outside the poses' time span or across a gap longer than max_pose_gap_s, and
-/// malformed clouds (no float x/y/z fields, sizes that disagree), are skipped and counted
-/// (skipped()), never guessed.
+/// malformed clouds (the reader's reasons: no float x/y/z fields, sizes that disagree), are
+/// skipped and counted (skipped()), never guessed.
 class RosbagSource : public PointBatchSource {
  public:
   static Result<std::unique_ptr<RosbagSource>> open(const RosbagSourceOptions& options);

@@ -5,14 +5,17 @@
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
 #include <sensor_msgs/PointCloud2.h>
+#include <tf2/buffer_core.h>
+#include <tf2/exceptions.h>
 #include <tf2_msgs/TFMessage.h>
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <map>
+#include <set>
 
 #include "build_map/build_map_readers.h"
+#include "gmm_localization/ros/cloud_conversion.h"
 
 namespace gmm_localization {
 namespace tools {
@@ -36,59 +39,94 @@ Eigen::Isometry3d toIsometry(const geometry_msgs::Transform& p) {
   return toIsometry(pose);
 }
 
-double readFloat(const uint8_t* p, int type) {
-  if (type == sensor_msgs::PointField::FLOAT32) {
-    float f;
-    std::memcpy(&f, p, 4);
-    return f;
+struct StampedPose {
+  double t;
+  Eigen::Isometry3d pose;
+};
+
+/// The transforms of every tf2_msgs/TFMessage on `topic`.
+std::vector<geometry_msgs::TransformStamped> readTf(rosbag::Bag& bag, const std::string& topic) {
+  std::vector<geometry_msgs::TransformStamped> out;
+  rosbag::View view(bag, rosbag::TopicQuery(topic));
+  for (const rosbag::MessageInstance& msg : view) {
+    if (auto tf = msg.instantiate<tf2_msgs::TFMessage>()) {
+      out.insert(out.end(), tf->transforms.begin(), tf->transforms.end());
+    }
   }
-  double d;
-  std::memcpy(&d, p, 8);
-  return d;
+  return out;
 }
 
-/// Reads x, y, z (and, when `time_field` is non-empty and present, the per-point time [s]) of
-/// every point; returns an empty string on success, else what is malformed. `times` is left
-/// empty when the cloud has no such field.
-std::string readPoints(const sensor_msgs::PointCloud2& c, const std::string& time_field,
-                       std::vector<Eigen::Vector3f>& out, std::vector<float>& times) {
-  out.clear();
-  times.clear();
-  int offset[4] = {-1, -1, -1, -1}, type[4] = {0, 0, 0, 0};
-  const std::string names[4] = {"x", "y", "z", time_field};
-  for (const auto& f : c.fields) {
-    for (int k = 0; k < 4; ++k) {
-      if (!names[k].empty() && f.name == names[k]) {
-        offset[k] = static_cast<int>(f.offset);
-        type[k] = f.datatype;
+/// The frames from `frame` up to its root (or to `stop`), `frame` first.
+std::set<std::string> ancestors(const std::string& frame, const std::string& stop,
+                                const std::map<std::string, std::string>& parent_of) {
+  std::set<std::string> out;
+  for (std::string f = frame; out.insert(f).second && f != stop;) {
+    auto p = parent_of.find(f);
+    if (p == parent_of.end()) break;
+    f = p->second;
+  }
+  return out;
+}
+
+/// Poses of `child` in `parent` from the bag's /tf (and /tf_static), composed through the TF
+/// tree: looked up at every stamp of a dynamic transform on the chain between the two frames
+/// (interpolated by tf2 between the stamps of the other edges). Fails naming the frames and
+/// listing the bag's dynamic edges when none can be looked up.
+Result<std::vector<StampedPose>> posesFromTf(const std::vector<geometry_msgs::TransformStamped>& tf,
+                                             const std::vector<geometry_msgs::TransformStamped>& st,
+                                             const std::string& parent, const std::string& child) {
+  using R = Result<std::vector<StampedPose>>;
+  double t0 = 0.0, t1 = 0.0;
+  for (size_t i = 0; i < tf.size(); ++i) {
+    const double t = tf[i].header.stamp.toSec();
+    t0 = i == 0 ? t : std::min(t0, t);
+    t1 = i == 0 ? t : std::max(t1, t);
+  }
+  // Every transform kept for the whole bag.
+  tf2::BufferCore buffer(ros::Duration(t1 - t0 + 10.0));
+  std::map<std::string, std::string> parent_of;
+  for (const auto& t : st) {
+    buffer.setTransform(t, "bag", true);
+    parent_of[t.child_frame_id] = t.header.frame_id;
+  }
+  std::set<std::pair<std::string, std::string>> edges;
+  for (const auto& t : tf) {
+    buffer.setTransform(t, "bag", false);
+    parent_of[t.child_frame_id] = t.header.frame_id;
+    edges.insert({t.header.frame_id, t.child_frame_id});
+  }
+  std::set<std::string> chain = ancestors(child, parent, parent_of);
+  const std::set<std::string> up = ancestors(parent, child, parent_of);
+  chain.insert(up.begin(), up.end());
+  std::set<ros::Time> stamps;
+  for (const auto& t : tf) {
+    if (chain.count(t.child_frame_id)) stamps.insert(t.header.stamp);
+  }
+  std::vector<StampedPose> poses;
+  std::string last_error;
+  for (const ros::Time& t : stamps) {
+    try {
+      const auto p = buffer.lookupTransform(parent, child, t);
+      poses.push_back({t.toSec(), toIsometry(p.transform)});
+    } catch (const tf2::TransformException& e) {
+      last_error = e.what();
+    }
+  }
+  if (poses.empty()) {
+    std::string have;
+    size_t listed = 0;
+    for (const auto& [p, c] : edges) {
+      if (listed++ == 8) {
+        have += ", ...";
+        break;
       }
+      have += (have.empty() ? "" : ", ") + p + " -> " + c;
     }
+    return R::failure("no transform " + parent + " -> " + child + " in /tf" +
+                      (last_error.empty() ? "" : " (" + last_error + ")") +
+                      "; its edges: " + (have.empty() ? "none" : have));
   }
-  const int fields = offset[3] >= 0 ? 4 : 3;
-  for (int k = 0; k < fields; ++k) {
-    if (offset[k] < 0) return "no field '" + names[k] + "'";
-    if (type[k] != sensor_msgs::PointField::FLOAT32 &&
-        type[k] != sensor_msgs::PointField::FLOAT64) {
-      return "field '" + names[k] + "' is not FLOAT32/FLOAT64";
-    }
-    const int size = type[k] == sensor_msgs::PointField::FLOAT32 ? 4 : 8;
-    if (static_cast<uint64_t>(offset[k]) + size > c.point_step) return "point_step too small";
-  }
-  if (c.is_bigendian) return "big-endian data";
-  if (uint64_t{c.width} * c.point_step > c.row_step) return "row_step < width * point_step";
-  if (uint64_t{c.row_step} * c.height > c.data.size()) return "data shorter than row_step * height";
-  out.reserve(uint64_t{c.width} * c.height);
-  for (uint32_t r = 0; r < c.height; ++r) {
-    const uint8_t* row = c.data.data() + uint64_t{r} * c.row_step;
-    for (uint32_t i = 0; i < c.width; ++i) {
-      const uint8_t* p = row + uint64_t{i} * c.point_step;
-      out.emplace_back(static_cast<float>(readFloat(p + offset[0], type[0])),
-                       static_cast<float>(readFloat(p + offset[1], type[1])),
-                       static_cast<float>(readFloat(p + offset[2], type[2])));
-      if (fields == 4) times.push_back(static_cast<float>(readFloat(p + offset[3], type[3])));
-    }
-  }
-  return {};
+  return R(std::move(poses));
 }
 
 }  // namespace
@@ -98,18 +136,15 @@ struct RosbagSource::Impl {
   rosbag::Bag bag;
   std::unique_ptr<rosbag::View> clouds;
   rosbag::View::iterator it;
-  struct StampedPose {
-    double t;
-    Eigen::Isometry3d pose;
-  };
   std::vector<StampedPose> poses;
-  std::string child_frame;  // empty: the pose type has none
-  std::map<std::pair<std::string, std::string>, Eigen::Isometry3d> tf_static;  // parent_T_child
-  std::map<std::string, Eigen::Isometry3d> extrinsic;                          // per cloud frame
+  std::string child_frame;                             // empty: the pose type has none
+  std::unique_ptr<tf2::BufferCore> tf_static;          // /tf_static, for the extrinsics
+  std::map<std::string, Eigen::Isometry3d> extrinsic;  // per cloud frame
   size_t total = 0, index = 0;
   size_t skipped_every = 0, skipped_no_pose = 0, skipped_gap = 0, skipped_malformed = 0;
-  size_t deskewed = 0;
-  std::string last_malformed;
+  size_t deskewed = 0, no_times = 0, refused_times = 0;
+  std::string last_malformed, last_refused;
+  std::set<std::string> time_sources;  // how the deskewed clouds' times were read
 
   bool interpolate(double t, Eigen::Isometry3d& out, bool& gap) const {
     gap = false;
@@ -165,39 +200,44 @@ Result<std::unique_ptr<RosbagSource>> RosbagSource::open(const RosbagSourceOptio
   const std::string where = "bag '" + o.path + "'";
   try {
     m.bag.open(o.path, rosbag::bagmode::Read);
-    rosbag::View pose_view(m.bag, rosbag::TopicQuery(o.pose_topic));
-    for (const rosbag::MessageInstance& msg : pose_view) {
-      if (auto odom = msg.instantiate<nav_msgs::Odometry>()) {
-        m.poses.push_back({odom->header.stamp.toSec(), toIsometry(odom->pose.pose)});
-        m.child_frame = odom->child_frame_id;
-      } else if (auto ps = msg.instantiate<geometry_msgs::PoseStamped>()) {
-        m.poses.push_back({ps->header.stamp.toSec(), toIsometry(ps->pose)});
-      } else if (auto pc = msg.instantiate<geometry_msgs::PoseWithCovarianceStamped>()) {
-        m.poses.push_back({pc->header.stamp.toSec(), toIsometry(pc->pose.pose)});
-      } else {
-        return R::failure(where + ": pose topic '" + o.pose_topic + "' carries " +
-                          msg.getDataType() +
-                          ", not Odometry, PoseStamped or PoseWithCovarianceStamped");
-      }
-    }
-    if (m.poses.empty())
-      return R::failure(where + ": no message on pose topic '" + o.pose_topic + "'");
-    std::stable_sort(
-        m.poses.begin(), m.poses.end(),
-        [](const Impl::StampedPose& a, const Impl::StampedPose& b) { return a.t < b.t; });
-    m.poses.erase(std::unique(m.poses.begin(), m.poses.end(),
-                              [](const Impl::StampedPose& a, const Impl::StampedPose& b) {
-                                return a.t == b.t;
-                              }),
-                  m.poses.end());
-    rosbag::View tf_view(m.bag, rosbag::TopicQuery("/tf_static"));
-    for (const rosbag::MessageInstance& msg : tf_view) {
-      if (auto tf = msg.instantiate<tf2_msgs::TFMessage>()) {
-        for (const auto& t : tf->transforms) {
-          m.tf_static[{t.header.frame_id, t.child_frame_id}] = toIsometry(t.transform);
+    const std::vector<geometry_msgs::TransformStamped> tf_static = readTf(m.bag, "/tf_static");
+    m.tf_static = std::make_unique<tf2::BufferCore>();
+    for (const auto& t : tf_static) m.tf_static->setTransform(t, "bag", true);
+    if (!o.pose_tf_child.empty()) {
+      auto poses = posesFromTf(readTf(m.bag, "/tf"), tf_static, o.pose_tf_parent, o.pose_tf_child);
+      if (!poses) return R::failure(where + ": " + poses.error());
+      m.poses = std::move(*poses);
+      m.child_frame = o.pose_tf_child;
+    } else {
+      rosbag::View pose_view(m.bag, rosbag::TopicQuery(o.pose_topic));
+      for (const rosbag::MessageInstance& msg : pose_view) {
+        if (auto odom = msg.instantiate<nav_msgs::Odometry>()) {
+          m.poses.push_back({odom->header.stamp.toSec(), toIsometry(odom->pose.pose)});
+          m.child_frame = odom->child_frame_id;
+        } else if (auto ps = msg.instantiate<geometry_msgs::PoseStamped>()) {
+          m.poses.push_back({ps->header.stamp.toSec(), toIsometry(ps->pose)});
+        } else if (auto pc = msg.instantiate<geometry_msgs::PoseWithCovarianceStamped>()) {
+          m.poses.push_back({pc->header.stamp.toSec(), toIsometry(pc->pose.pose)});
+        } else {
+          return R::failure(where + ": pose topic '" + o.pose_topic + "' carries " +
+                            msg.getDataType() +
+                            ", not Odometry, PoseStamped or PoseWithCovarianceStamped");
         }
       }
+      if (m.poses.empty()) {
+        std::string hint;
+        if (rosbag::View(m.bag, rosbag::TopicQuery("/tf")).size() > 0) {
+          hint = " (the bag has /tf: --pose-tf PARENT,CHILD takes the poses from it)";
+        }
+        return R::failure(where + ": no message on pose topic '" + o.pose_topic + "'" + hint);
+      }
     }
+    std::stable_sort(m.poses.begin(), m.poses.end(),
+                     [](const StampedPose& a, const StampedPose& b) { return a.t < b.t; });
+    m.poses.erase(
+        std::unique(m.poses.begin(), m.poses.end(),
+                    [](const StampedPose& a, const StampedPose& b) { return a.t == b.t; }),
+        m.poses.end());
     m.clouds = std::make_unique<rosbag::View>(m.bag, rosbag::TopicQuery(o.cloud_topic));
     m.total = m.clouds->size();
     if (m.total == 0)
@@ -213,8 +253,6 @@ Result<bool> RosbagSource::next(PointBatch& batch) {
   using R = Result<bool>;
   Impl& m = *impl_;
   batch.clear();
-  std::vector<Eigen::Vector3f> points;
-  std::vector<float> times;
   try {
     for (; m.it != m.clouds->end(); ++m.it) {
       const rosbag::MessageInstance& msg = *m.it;
@@ -234,12 +272,24 @@ Result<bool> RosbagSource::next(PointBatch& batch) {
         ++(gap ? m.skipped_gap : m.skipped_no_pose);
         continue;
       }
-      const std::string malformed =
-          readPoints(*cloud, m.o.deskew ? m.o.time_field : std::string(), points, times);
-      if (!malformed.empty()) {
+      // The matcher's reader (cloud_conversion.h): x, y, z and the per-point times of any
+      // driver it knows, converted to seconds after the stamp.
+      auto data = node::fromMsg(*cloud, m.o.time_field);
+      if (!data) {
         ++m.skipped_malformed;
-        m.last_malformed = malformed;
+        m.last_malformed = data.error();
         continue;
+      }
+      const std::vector<Eigen::Vector3f>& points = data->points;
+      std::vector<float> times;
+      if (m.o.deskew) {
+        times = std::move(data->time_s);
+        if (!data->time_problem.empty()) {
+          ++m.refused_times;
+          m.last_refused = data->time_problem;
+        } else if (times.empty()) {
+          ++m.no_times;
+        }
       }
       const std::string& frame = cloud->header.frame_id;
       auto ext = m.extrinsic.find(frame);
@@ -248,16 +298,15 @@ Result<bool> RosbagSource::next(PointBatch& batch) {
         if (m.o.has_extrinsic) {
           e = m.o.pose_T_cloud;
         } else if (!m.child_frame.empty() && frame != m.child_frame) {
-          auto direct = m.tf_static.find({m.child_frame, frame});
-          auto reverse = m.tf_static.find({frame, m.child_frame});
-          if (direct != m.tf_static.end()) {
-            e = direct->second;
-          } else if (reverse != m.tf_static.end()) {
-            e = reverse->second.inverse();
-          } else {
+          // The chain of /tf_static edges between the two frames, in either direction.
+          try {
+            e = toIsometry(
+                m.tf_static->lookupTransform(m.child_frame, frame, ros::Time(0)).transform);
+          } catch (const tf2::TransformException& ex) {
             return R::failure("bag '" + m.o.path + "': the clouds are in frame '" + frame +
                               "' but the poses are of frame '" + m.child_frame +
-                              "', and /tf_static has no edge between them: pass --extrinsic");
+                              "', and /tf_static has no chain of transforms between them (" +
+                              ex.what() + "): pass --extrinsic");
           }
         }
         ext = m.extrinsic.emplace(frame, e).first;
@@ -270,6 +319,7 @@ Result<bool> RosbagSource::next(PointBatch& batch) {
         continue;
       } else {
         ++m.deskewed;
+        m.time_sources.insert(node::describePointTimes(*data));
       }
       batch.has_sensor_origin = true;
       batch.sensor_origin_m = (m.o.map_T_world * pose * ext->second).translation();
@@ -285,15 +335,24 @@ Result<bool> RosbagSource::next(PointBatch& batch) {
 size_t RosbagSource::sizeHint() const { return impl_->total; }
 
 std::string RosbagSource::describe() const {
-  return "rosbag '" + impl_->o.path + "' (" + std::to_string(impl_->total) + " clouds on '" +
-         impl_->o.cloud_topic + "', " + std::to_string(impl_->poses.size()) + " poses on '" +
-         impl_->o.pose_topic + "')";
+  const Impl& m = *impl_;
+  const std::string poses = m.o.pose_tf_child.empty() ? "on '" + m.o.pose_topic + "'"
+                                                      : "of " + m.o.pose_tf_parent + " -> " +
+                                                            m.o.pose_tf_child + " from /tf";
+  return "rosbag '" + m.o.path + "' (" + std::to_string(m.total) + " clouds on '" +
+         m.o.cloud_topic + "', " + std::to_string(m.poses.size()) + " poses " + poses + ")";
 }
 
 std::string RosbagSource::skipped() const {
   const Impl& m = *impl_;
-  std::string s = std::to_string(m.deskewed) + " deskewed with per-point '" + m.o.time_field +
-                  "'; skipped: " + std::to_string(m.skipped_no_pose) +
+  std::string sources;
+  for (const std::string& t : m.time_sources) sources += (sources.empty() ? "" : ", ") + t;
+  std::string s = std::to_string(m.deskewed) + " deskewed" +
+                  (sources.empty() ? "" : " (per-point " + sources + ")") + ", " +
+                  std::to_string(m.no_times) + " without per-point times, " +
+                  std::to_string(m.refused_times) + " with times that make no sense" +
+                  (m.last_refused.empty() ? "" : " (last: " + m.last_refused + ")") +
+                  "; skipped: " + std::to_string(m.skipped_no_pose) +
                   " outside the poses' time span, " + std::to_string(m.skipped_gap) +
                   " across a pose gap, " + std::to_string(m.skipped_malformed) + " malformed" +
                   (m.last_malformed.empty() ? "" : " (last: " + m.last_malformed + ")") + ", " +

@@ -47,6 +47,26 @@ bool hasTopic(const rosbag::Bag& bag, const std::string& topic) {
 
 }  // namespace
 
+Result<LabelledScan> scanFromCloud(const sensor_msgs::PointCloud2& msg,
+                                   const std::string& base_frame) {
+  using R = Result<LabelledScan>;
+  if (msg.header.frame_id != base_frame) {
+    return R::failure("cloud in frame '" + msg.header.frame_id + "', expected '" + base_frame +
+                      "' (merged clouds only)");
+  }
+  auto cloud = node::fromMsg(msg);
+  if (!cloud) return R::failure("cloud: " + cloud.error());
+  LabelledScan s;
+  s.scan.stamp_s = msg.header.stamp.toSec();
+  s.scan.points = std::move(cloud->points);
+  s.scan.time_s = std::move(cloud->time_s);
+  // As the matcher: the status says how the times were read, or why they were refused.
+  s.scan.time_source = node::describePointTimes(*cloud);
+  s.scan.time_problem = std::move(cloud->time_problem);
+  s.label = std::move(cloud->label);
+  return s;
+}
+
 namespace {
 
 /// One converted message.
@@ -140,21 +160,13 @@ class Prefetcher {
         addProblem(topic + ": not a sensor_msgs/PointCloud2");
         return false;
       }
-      if (msg->header.frame_id != topics_.base_frame) {
-        addProblem("cloud in frame '" + msg->header.frame_id + "', expected '" +
-                   topics_.base_frame + "' (merged clouds only)");
-        return false;
-      }
-      auto cloud = node::fromMsg(*msg);
-      if (!cloud) {
-        addProblem("cloud: " + cloud.error());
+      auto scan = scanFromCloud(*msg, topics_.base_frame);
+      if (!scan) {
+        addProblem(scan.error());
         return false;
       }
       e.kind = Event::kScan;
-      e.scan.scan.stamp_s = msg->header.stamp.toSec();
-      e.scan.scan.points = std::move(cloud->points);
-      e.scan.scan.time_s = std::move(cloud->time_s);
-      e.scan.label = std::move(cloud->label);
+      e.scan = std::move(*scan);
       e.scan.record_time_s = m.getTime().toSec();
       count(&BagReadStats::scans, e.scan.scan.stamp_s);
       return true;

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include <sensor_msgs/PointCloud2.h>
+
 #include "evaluate/evaluate_metrics.h"
 #include "gmm_localization/core/common/result.h"
 #include "gmm_localization/core/filter/ekf_measurement.h"
@@ -48,6 +50,13 @@ struct BagReadStats {
   std::vector<std::string> problems;  ///< first few reasons for skipped messages
   double first_stamp_s = 0.0, last_stamp_s = 0.0;
 };
+
+/// One merged cloud as the matcher reads it (Matcher::scanToBase: node::fromMsg, with how its
+/// per-point times were read in time_source, or why they were refused in time_problem), with
+/// its labels; record_time_s is left 0. Fails, with the reason, when the cloud is not in
+/// base_frame (merged clouds only) or is malformed.
+Result<LabelledScan> scanFromCloud(const sensor_msgs::PointCloud2& msg,
+                                   const std::string& base_frame);
 
 /// Visits every message of the four topics in record order (callbacks may be empty to skip a
 /// topic cheaply). Fails when the bag cannot be opened or lacks the cloud or ground-truth topic.

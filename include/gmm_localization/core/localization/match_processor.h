@@ -24,6 +24,10 @@ struct ScanInput {
   PointList points;      ///< base_link [m]; non-finite points allowed (dropped and counted)
   /// Per-point capture time relative to stamp_s [s] (empty: no deskewing), same size as points.
   std::vector<float> time_s;
+  /// How time_s was read, for the status (e.g. "'t' uint32 relative nanoseconds"); empty: none.
+  std::string time_source;
+  /// Why time_s is empty although the cloud has a time field (its times make no sense).
+  std::string time_problem;
   /// Evaluation only: the ground-truth pose, whose search score deficit the result reports
   /// (MatchResult::reference_deficit_per_point).
   bool has_reference = false;
@@ -48,6 +52,10 @@ struct MatchReport {
   WindowExtent window;         ///< requested half extents
   SearchWindow search_window;  ///< discretised (cells, heading steps), valid when searched
   bool deskewed = false;
+  std::string time_source;  ///< ScanInput::time_source
+  /// Why the scan was not deskewed (no or refused per-point times, no twist, skipped before);
+  /// empty when deskewed.
+  std::string deskew_note;
 
   // Input
   size_t input_points = 0;
