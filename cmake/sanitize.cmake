@@ -7,6 +7,9 @@
 # (-fno-sanitize-recover); the null, alignment, object-size and pointer-overflow checks are
 # left out (below). gmm_core and gmm_sim drop -Werror there. Included before any target is
 # defined.
+# (catkin_lint would have the project's name in a global variable: GMM_SANITIZE is the option's
+# name that scripts/run_sanitizers.sh and the docs use.)
+#catkin_lint: ignore_once global_var_collision
 set(GMM_SANITIZE "" CACHE STRING
   "-fsanitize= list for a sanitizer build (address,undefined or thread); empty: none")
 if(GMM_SANITIZE)
@@ -42,5 +45,5 @@ if(GMM_SANITIZE)
       OUTPUT_VARIABLE GMM_CLANG_RESOURCE_DIR OUTPUT_STRIP_TRAILING_WHITESPACE)
     add_link_options(-shared-libsan -Wl,-rpath,${GMM_CLANG_RESOURCE_DIR}/lib/linux)
   endif()
-  message(STATUS "gmm_localization: sanitizer build (${GMM_SANITIZE_FLAGS})")
+  message(STATUS "${PROJECT_NAME}: sanitizer build (${GMM_SANITIZE_FLAGS})")
 endif()

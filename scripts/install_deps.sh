@@ -9,7 +9,12 @@ PACKAGES=(
   libtf2-geometry-msgs-dev libtf2-sensor-msgs-dev librosbag-dev librostest-dev
   libdiagnostic-msgs-dev libnav-msgs-dev libstd-srvs-dev libvisualization-msgs-dev
   ros-message-generation
-  python3-roslaunch python3-rostest python3-rosbag python3-numpy python3-matplotlib
+  libdiagnostic-updater-dev libdiagnostic-aggregator-dev libdiagnostic-aggregator-tools
+  rosdiagnostic catkin-lint rosbash
+  python3-roslaunch python3-rostest python3-rosbag python3-rostopic python3-numpy
+  python3-matplotlib
+  python3-std-msgs python3-geometry-msgs python3-sensor-msgs python3-nav-msgs
+  python3-diagnostic-msgs python3-tf2-msgs python3-visualization-msgs
   libeigen3-dev libyaml-cpp-dev zlib1g-dev libgtest-dev libbenchmark-dev libtbb-dev libembree-dev
   rviz xvfb imagemagick clang-format
   clang-14 libclang-rt-14-dev

@@ -13,7 +13,7 @@ constexpr double kRecentS = 10.0;  // a problem this recent keeps its WARN
 }  // namespace
 
 void CloudMerger::setUpDiagnostics() {
-  diagnostics_ = std::make_unique<Diagnostics>(nh_, name_);
+  diagnostics_ = std::make_unique<Diagnostics>(nh_, pnh_, name_);
   for (size_t i = 0; i < inputs_.size(); ++i) {
     diagnostics_->add("input " + inputs_[i]->topic, [this, i](StatusBuilder& s) {
       // The first WARN sets the message: specific problems before the rate check.
@@ -27,14 +27,19 @@ void CloudMerger::setUpDiagnostics() {
       s.add("late clouds dropped", std::to_string(in.late));
       s.add("out-of-window clouds dropped", std::to_string(in.out_of_window));
       s.add("non-finite points dropped", std::to_string(in.nonfinite_points));
+      s.add("clouds merged without valid point times", std::to_string(in.untimed));
       if (!in.last_error.empty()) s.add("last problem", in.last_error);
+      if (!in.last_time_problem.empty()) s.add("last point time problem", in.last_time_problem);
+      const double now = ros::WallTime::now().toSec();
       if (in.received == 0) {
         s.summary(DiagnosticStatus::WARN, "no cloud received yet");
-      } else if (ros::WallTime::now().toSec() - in.last_error_time_s < kRecentS) {
+      } else if (now - in.last_error_time_s < kRecentS) {
         s.summary(DiagnosticStatus::WARN, in.last_error);
+      } else if (now - in.last_time_problem_s < kRecentS) {
+        s.summary(DiagnosticStatus::WARN, "merged scans not deskewed: " + in.last_time_problem);
       }
       lock.unlock();
-      in.rate.fill(s, "input");
+      in.rate.fill(s);
     });
   }
 
@@ -45,6 +50,7 @@ void CloudMerger::setUpDiagnostics() {
     s.add("complete sets", std::to_string(c.complete));
     s.add("incomplete sets", std::to_string(c.incomplete));
     s.add("resets (time went backwards)", std::to_string(c.resets));
+    s.add("scans with NaN point times", std::to_string(untimed_scans_));
     s.add("points in last scan", last_points_);
     s.add("last merge latency [ms]", last_latency_ms_);
     s.add("mean merge latency [ms]",
@@ -57,7 +63,7 @@ void CloudMerger::setUpDiagnostics() {
       s.summary(DiagnosticStatus::WARN, "scans published without " + names);
     }
     lock.unlock();
-    output_rate_.fill(s, "output");
+    output_rate_.fill(s);
   });
 }
 

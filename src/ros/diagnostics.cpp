@@ -1,6 +1,7 @@
 #include "gmm_localization/ros/diagnostics.h"
 
 #include <algorithm>
+#include <cstdio>
 
 namespace gmm_localization {
 namespace node {
@@ -12,6 +13,10 @@ void StatusBuilder::summary(uint8_t level, const std::string& message) {
   }
 }
 
+void StatusBuilder::merge(uint8_t level, const std::string& message) {
+  status_.mergeSummary(level, message);
+}
+
 void StatusBuilder::add(const std::string& key, const std::string& value) {
   diagnostic_msgs::KeyValue kv;
   kv.key = key;
@@ -19,56 +24,61 @@ void StatusBuilder::add(const std::string& key, const std::string& value) {
   status_.values.push_back(kv);
 }
 
-void FrequencyMonitor::tick(const ros::WallTime& now) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  events_.push_back(now);
-  while (!events_.empty() && (now - events_.front()).toSec() > window_s_) events_.pop_front();
+FrequencyMonitor::FrequencyMonitor(double min_hz, double max_hz, double max_delay_s,
+                                   double min_delay_s)
+    : min_hz_(min_hz), max_hz_(max_hz) {
+  frequency_ = std::make_unique<diagnostic_updater::FrequencyStatus>(
+      diagnostic_updater::FrequencyStatusParam(&min_hz_, &max_hz_, 0.1, 5));
+  stamps_ = std::make_unique<diagnostic_updater::TimeStampStatus>(
+      diagnostic_updater::TimeStampStatusParam(min_delay_s, max_delay_s));
 }
 
-double FrequencyMonitor::rateHz(const ros::WallTime& now) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  while (!events_.empty() && (now - events_.front()).toSec() > window_s_) events_.pop_front();
-  return static_cast<double>(events_.size()) / window_s_;
+void FrequencyMonitor::stamp(const ros::Time& stamp) {
+  stamps_->tick(stamp);
+  stamped_ = true;
 }
 
-void FrequencyMonitor::fill(StatusBuilder& s, const std::string& what) {
-  const double hz = rateHz();
-  s.add(what + " rate [Hz]", hz);
-  if (hz < min_hz_) {
-    s.summary(diagnostic_msgs::DiagnosticStatus::WARN, what + " rate too low");
-  } else if (hz > max_hz_) {
-    s.summary(diagnostic_msgs::DiagnosticStatus::WARN, what + " rate too high");
-  }
+void FrequencyMonitor::fill(StatusBuilder& s) {
+  auto run = [&s](diagnostic_updater::DiagnosticTask& check) {
+    diagnostic_updater::DiagnosticStatusWrapper result;
+    result.level = diagnostic_msgs::DiagnosticStatus::OK;
+    check.run(result);
+    s.merge(result.level, result.message);
+    for (const diagnostic_msgs::KeyValue& kv : result.values) s.add(kv.key, kv.value);
+  };
+  run(*frequency_);
+  // A topic whose stamps are not checked has no "No data since last update." either.
+  if (stamped_) run(*stamps_);
 }
 
-Diagnostics::Diagnostics(ros::NodeHandle& nh, const std::string& hardware_id, double period_s)
-    : hardware_id_(hardware_id) {
-  // Absolute topic: aggregators expect /diagnostics whatever the node's namespace.
-  pub_ = nh.advertise<diagnostic_msgs::DiagnosticArray>("/diagnostics", 10);
+std::string silenceText(bool ever_heard, double silent_for_s) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), ever_heard ? "for %.1f s" : "in the %.1f s since start-up",
+                silent_for_s);
+  return buf;
+}
+
+Diagnostics::Diagnostics(const ros::NodeHandle& nh, const ros::NodeHandle& pnh,
+                         const std::string& hardware_id, double period_s)
+    // Updater names each status "<node_name minus its first character>: <task>": "/" + the
+    // nodelet's name keeps the leading slash ("/localization/matcher: scan matching").
+    : updater_(nh, pnh, "/" + hardware_id) {
+  updater_.setHardwareID(hardware_id);
   timer_ = nh.createWallTimer(ros::WallDuration(period_s),
                               [this](const ros::WallTimerEvent&) { update(); });
 }
 
 void Diagnostics::add(const std::string& name, Task task) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  tasks_.emplace_back(name, std::move(task));
+  updater_.add(name, [task = std::move(task)](diagnostic_updater::DiagnosticStatusWrapper& w) {
+    w.level = diagnostic_msgs::DiagnosticStatus::OK;
+    w.message.clear();
+    StatusBuilder s(w);
+    task(s);
+    if (w.message.empty()) w.message = "OK";
+  });
 }
 
-void Diagnostics::update() {
-  diagnostic_msgs::DiagnosticArray array;
-  array.header.stamp = ros::Time::now();
-  std::lock_guard<std::mutex> lock(mutex_);
-  for (auto& [name, task] : tasks_) {
-    StatusBuilder s;
-    s.status().level = diagnostic_msgs::DiagnosticStatus::OK;
-    task(s);
-    s.status().name = hardware_id_ + ": " + name;
-    s.status().hardware_id = hardware_id_;
-    if (s.status().message.empty()) s.status().message = "OK";
-    array.status.push_back(s.status());
-  }
-  pub_.publish(array);
-}
+void Diagnostics::update() { updater_.force_update(); }
 
 }  // namespace node
 }  // namespace gmm_localization

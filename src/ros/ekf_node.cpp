@@ -1,6 +1,8 @@
 // EkfNode set-up (see ekf_node.h).
 #include "gmm_localization/ros/ekf_node.h"
 
+#include <limits>
+
 #include "gmm_localization/ros/params.h"
 
 namespace gmm_localization {
@@ -12,12 +14,19 @@ EkfNode::EkfNode(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& nam
       pnh_(pnh),
       options_(loadNodeletOptions(pnh, name, loadEkfNodeOptions)),
       tf_listener_(tf_buffer_),
-      imu_rate_(0.0, 1e9),
-      odom_rate_(0.0, 1e9),
-      match_rate_(0.0, 1e9) {
+      // No rate is expected of the IMU and the INS: only "No events recorded." (and stamps).
+      imu_rate_(0.0, std::numeric_limits<double>::infinity()),
+      odom_rate_(0.0, std::numeric_limits<double>::infinity()) {
   auto filter = LocalizationFilter::create(options_.ekf, options_.filter);
   if (!filter) throw ConfigError(filter.error());
   filter_ = std::make_unique<LocalizationFilter>(std::move(filter).value());
+
+  imu_topic_ = nh_.resolveName("imu");
+  odom_topic_ = nh_.resolveName("odom");
+  imu_input_ = inputs_.add(imu_topic_, /*watch_silence=*/options_.use_imu);
+  odom_input_ = inputs_.add(odom_topic_);
+  match_input_ = inputs_.add(nh_.resolveName("pose"), /*watch_silence=*/false);
+  inputs_.start(ros::WallTime::now().toSec());
 
   odometry_pub_ = nh_.advertise<nav_msgs::Odometry>("odometry", 20);
   const ros::TransportHints hints = ros::TransportHints().tcpNoDelay();

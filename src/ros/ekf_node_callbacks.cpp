@@ -62,7 +62,8 @@ void EkfNode::handleEvents() {
 void EkfNode::onImu(const sensor_msgs::Imu::ConstPtr& msg) {
   std::lock_guard<std::mutex> lock(mutex_);
   imu_rate_.tick();
-  last_imu_wall_ = ros::WallTime::now();
+  imu_rate_.stamp(msg->header.stamp);
+  inputs_.heard(imu_input_, ros::WallTime::now().toSec());
   const auto rotation = imuRotation(msg->header.frame_id);
   if (!rotation) return;
   const auto imu = imuFromMsg(*msg, *rotation);
@@ -71,21 +72,25 @@ void EkfNode::onImu(const sensor_msgs::Imu::ConstPtr& msg) {
     ROS_WARN_THROTTLE(5.0, "%s: IMU sample ignored: %s", name_.c_str(), imu.error().c_str());
     return;
   }
+  bool invalid = false;  // counted once per message, whatever its parts
   for (const FuseReport& r : filter_->addImu(*imu)) {
     if (r.outcome == FuseOutcome::kRejectedInvalid) {
+      invalid = true;
       ROS_WARN_THROTTLE(5.0, "%s: %s", name_.c_str(), r.reason.c_str());
     } else if (droppedForItsStamp(r.outcome)) {
       ROS_WARN_THROTTLE(5.0, "%s: IMU message dropped (%s): %s", name_.c_str(),
                         outcomeName(r.outcome), r.reason.c_str());
     }
   }
+  bad_inputs_ += invalid ? 1 : 0;
   handleEvents();
 }
 
 void EkfNode::onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
   std::lock_guard<std::mutex> lock(mutex_);
   odom_rate_.tick();
-  last_odom_wall_ = ros::WallTime::now();
+  odom_rate_.stamp(msg->header.stamp);
+  inputs_.heard(odom_input_, ros::WallTime::now().toSec());
   if (!msg->child_frame_id.empty() && msg->child_frame_id != options_.base_frame) {
     ROS_WARN_THROTTLE(10.0,
                       "%s: INS odometry child frame '%s' is not '%s'; its twist is used "
@@ -113,8 +118,7 @@ void EkfNode::onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
 
 void EkfNode::onMatch(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg) {
   std::lock_guard<std::mutex> lock(mutex_);
-  match_rate_.tick();
-  last_match_wall_ = ros::WallTime::now();
+  inputs_.heard(match_input_, ros::WallTime::now().toSec());
   if (msg->header.frame_id != options_.map_frame) {
     ++bad_inputs_;
     ROS_WARN_THROTTLE(5.0, "%s: scan match in frame '%s' ignored (expected '%s')", name_.c_str(),
@@ -145,12 +149,18 @@ void EkfNode::onInitialPose(const geometry_msgs::PoseWithCovarianceStamped::Cons
   std::lock_guard<std::mutex> lock(mutex_);
   const auto pose = initialPoseInMap(*msg, options_.map_frame, tf_buffer_);
   if (!pose) {
-    ROS_WARN("%s: initial pose ignored: %s", name_.c_str(), pose.error().c_str());
+    ++bad_inputs_;
+    last_event_ = "initial pose ignored: " + pose.error();
+    ROS_WARN("%s: %s", name_.c_str(), last_event_.c_str());
     return;
   }
   const double stamp = msg->header.stamp.isZero() ? ros::Time::now().toSec() : pose->stamp_s;
   const Status s = filter_->setInitialPose(pose->pose, pose->covariance, stamp, false);
-  if (!s) ROS_WARN("%s: initial pose rejected: %s", name_.c_str(), s.error().c_str());
+  if (!s) {
+    ++bad_inputs_;
+    last_event_ = "initial pose rejected: " + s.error();
+    ROS_WARN("%s: %s", name_.c_str(), last_event_.c_str());
+  }
   handleEvents();
 }
 

@@ -1,5 +1,6 @@
 // EkfNode health on /diagnostics (ekf_node.h): input rates and dropouts, fused / rejected counts
-// per source, position and yaw sigma, time since the last fused match, resets and lockouts.
+// per source, position and yaw sigma, time since the last fused match, resets and lockouts; the
+// IMU and INS topics' rate and stamp checks, and the console lines of a silent input.
 #include <cmath>
 #include <cstdio>
 
@@ -23,7 +24,7 @@ double since(const ros::WallTime& t) {
 }  // namespace
 
 void EkfNode::setupDiagnostics() {
-  diagnostics_ = std::make_unique<Diagnostics>(nh_, name_);
+  diagnostics_ = std::make_unique<Diagnostics>(nh_, pnh_, name_);
   diagnostics_->add("filter", [this](StatusBuilder& s) {
     std::lock_guard<std::mutex> lock(mutex_);
     const EkfDiagnostics d = filter_->ekf().diagnostics();
@@ -64,18 +65,24 @@ void EkfNode::setupDiagnostics() {
   });
   diagnostics_->add("inputs", [this](StatusBuilder& s) {
     std::lock_guard<std::mutex> lock(mutex_);
-    s.add("imu rate [Hz]", fixed(imu_rate_.rateHz(), 1));
-    s.add("odom rate [Hz]", fixed(odom_rate_.rateHz(), 1));
-    s.add("scan match rate [Hz]", fixed(match_rate_.rateHz(), 2));
-    const double imu_age = since(last_imu_wall_), odom_age = since(last_odom_wall_),
-                 match_age = since(last_match_wall_);
+    const double now_s = ros::WallTime::now().toSec();
+    // Seconds since the input's last message, -1 when never.
+    auto age = [&](size_t input) {
+      return inputs_.everHeard(input) ? inputs_.silentFor(input, now_s) : -1.0;
+    };
+    s.add("imu rate [Hz]", fixed(inputs_.rateHz(imu_input_, now_s), 1));
+    s.add("odom rate [Hz]", fixed(inputs_.rateHz(odom_input_, now_s), 1));
+    s.add("scan match rate [Hz]", fixed(inputs_.rateHz(match_input_, now_s), 2));
+    const double imu_age = age(imu_input_), odom_age = age(odom_input_),
+                 match_age = age(match_input_);
     s.add("time since imu [s]", fixed(imu_age, 2));
     s.add("time since odom [s]", fixed(odom_age, 2));
     s.add("time since scan match [s]", fixed(match_age, 2));
+    // A source that has spoken and went silent briefly gets a dropout line; one silent for
+    // the watchdog's 5 s gets the line that names the fix (warnSilentInputs).
     if (options_.use_imu && (imu_age < 0.0 || imu_age > options_.imu_timeout_s)) {
       s.summary(diagnostic_msgs::DiagnosticStatus::WARN, "IMU dropout");
-      // A source that has spoken and went silent (not one that never started) is worth a line.
-      if (imu_age > 0.0) {
+      if (imu_age > 0.0 && !inputs_.silent(imu_input_, now_s)) {
         ROS_WARN_THROTTLE(5.0,
                           "%s: IMU dropout: no sample for %.1f s (imu_timeout_s %.1f); the "
                           "filter predicts without it",
@@ -84,7 +91,7 @@ void EkfNode::setupDiagnostics() {
     }
     if (odom_age < 0.0 || odom_age > options_.odom_timeout_s) {
       s.summary(diagnostic_msgs::DiagnosticStatus::WARN, "INS odometry dropout");
-      if (odom_age > 0.0) {
+      if (odom_age > 0.0 && !inputs_.silent(odom_input_, now_s)) {
         ROS_WARN_THROTTLE(5.0,
                           "%s: INS odometry dropout: no message for %.1f s (odom_timeout_s "
                           "%.1f); the filter predicts without its twist",
@@ -94,7 +101,56 @@ void EkfNode::setupDiagnostics() {
     if (match_age < 0.0 || match_age > options_.match_timeout_s) {
       s.summary(diagnostic_msgs::DiagnosticStatus::WARN, "no scan matches");
     }
+    warnSilentInputs(now_s);
   });
+  auto topic_status = [this](FrequencyMonitor& rate, size_t input, const std::string& topic,
+                             const char* fix) {
+    return [this, &rate, input, topic, fix](StatusBuilder& s) {
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        const double now_s = ros::WallTime::now().toSec();
+        s.add("topic", topic);
+        s.add("messages received", inputs_.count(input));
+        s.add("time since last message [s]", fixed(inputs_.silentFor(input, now_s), 2));
+        if (inputs_.silent(input, now_s)) {
+          s.summary(diagnostic_msgs::DiagnosticStatus::WARN,
+                    "no messages on " + topic + " " +
+                        silenceText(inputs_.everHeard(input), inputs_.silentFor(input, now_s)) +
+                        " (" + fix + ")");
+        }
+      }
+      rate.fill(s);
+    };
+  };
+  if (options_.use_imu) {
+    diagnostics_->add(imu_topic_ + " topic status",
+                      topic_status(imu_rate_, imu_input_, imu_topic_,
+                                   "launch argument imu_topic, or use_imu false"));
+  }
+  diagnostics_->add(
+      odom_topic_ + " topic status",
+      topic_status(odom_rate_, odom_input_, odom_topic_, "launch argument odom_topic"));
+}
+
+void EkfNode::warnSilentInputs(double now_s) {
+  for (const InputSilence& silence : inputs_.due(now_s)) {
+    const std::string when = silenceText(silence.ever_heard, silence.silent_for_s);
+    if (silence.input == imu_input_) {
+      ROS_WARN(
+          "%s: IMU dropout: no messages on %s %s: is the IMU driver or the bag running? "
+          "The EKF reads `imu`, remapped to the launch argument imu_topic; to run without an "
+          "IMU set use_imu: false in its parameters (config/ekf.yaml). Meanwhile the filter "
+          "predicts without it",
+          name_.c_str(), silence.name.c_str(), when.c_str());
+    } else {
+      ROS_WARN(
+          "%s: INS odometry dropout: no messages on %s %s: is the INS driver or the bag "
+          "running? The EKF and the matcher read `odom`, remapped to the launch argument "
+          "odom_topic (nav_msgs/Odometry, odom -> base_link). Meanwhile the filter predicts "
+          "without its twist and the matcher does not deskew",
+          name_.c_str(), silence.name.c_str(), when.c_str());
+    }
+  }
 }
 
 }  // namespace node

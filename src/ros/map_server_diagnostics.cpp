@@ -3,6 +3,7 @@
 
 #include <cstdio>
 
+#include "gmm_localization/core/common/input_watchdog.h"
 #include "gmm_localization/ros/map_server.h"
 
 namespace gmm_localization {
@@ -24,7 +25,7 @@ std::string tileName(const TileId& t) {
 }  // namespace
 
 void MapServer::setUpDiagnostics() {
-  diagnostics_ = std::make_unique<Diagnostics>(nh_, name_);
+  diagnostics_ = std::make_unique<Diagnostics>(nh_, pnh_, name_);
 
   diagnostics_->add("map", [this](StatusBuilder& s) {
     const ChunkEngineStats st = engine_->stats();
@@ -69,7 +70,9 @@ void MapServer::setUpDiagnostics() {
     s.summary(DiagnosticStatus::OK, st.chunks_pending > 0 ? "rasterizing" : "up to date");
   });
 
-  diagnostics_->add("vehicle position", [this](StatusBuilder& s) {
+  // The console line of a map that does not cover the vehicle: its own throttle (wall time).
+  diagnostics_->add("vehicle position", [this,
+                                         line = LineThrottle(30.0)](StatusBuilder& s) mutable {
     CentreSelection where;
     std::string tf_error;
     {
@@ -86,17 +89,31 @@ void MapServer::setUpDiagnostics() {
       return;
     }
     const MapSummary m = engine_->mapSummary();
-    bool outside = false;
+    const PlanCentre* outside = nullptr;
     for (size_t i = 0; i < where.centres.size(); ++i) {
       const PlanCentre& c = where.centres[i];
       s.add("x [m] #" + std::to_string(i), c.x());
       s.add("y [m] #" + std::to_string(i), c.y());
-      outside = outside || c.x() < m.min_x_m || c.x() > m.max_x_m || c.y() < m.min_y_m ||
-                c.y() > m.max_y_m;
+      if (outside == nullptr &&
+          (c.x() < m.min_x_m || c.x() > m.max_x_m || c.y() < m.min_y_m || c.y() > m.max_y_m)) {
+        outside = &c;
+      }
     }
-    if (outside) {
+    if (outside != nullptr) {
       s.summary(DiagnosticStatus::WARN, "vehicle position outside the map extent");
+      if (line.due(ros::WallTime::now().toSec())) {
+        ROS_WARN(
+            "%s: the vehicle position (%.1f, %.1f) m from %s is outside the map's extent x "
+            "[%.1f, %.1f], y [%.1f, %.1f] m: no map to match against. Either the map is not "
+            "the one of this place (map_directory '%s', the launch argument map) or the pose is "
+            "wrong (TF %s -> %s, /initialpose, initial_position): give a pose on the map on "
+            "/initialpose",
+            name_.c_str(), outside->x(), outside->y(), where.source.c_str(), m.min_x_m, m.max_x_m,
+            m.min_y_m, m.max_y_m, engine_->stats().map_directory.c_str(),
+            options_.map_frame.c_str(), options_.base_frame.c_str());
+      }
     } else {
+      line.reset();
       s.summary(DiagnosticStatus::OK, "position from " + where.source);
     }
   });

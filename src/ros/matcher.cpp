@@ -3,6 +3,8 @@
 
 #include <algorithm>
 
+#include <boost/function.hpp>
+
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <sensor_msgs/Image.h>
 
@@ -29,7 +31,8 @@ Matcher::Matcher(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& nam
       tf_listener_(tf_buffer_),
       session_(makeMatcherSession(options_)),
       scan_rate_(0.5 * options_.expected_scan_rate_hz, 2.0 * options_.expected_scan_rate_hz),
-      match_rate_(0.0, 1e9) {
+      acquisition_(
+          AcquisitionWatchOptions{acquisitionWarnAfter(options_.policy.relocalization), 15.0}) {
   auto processor = MatchProcessor::create(options_.registration, options_.policy);
   if (!processor) throw ConfigError(processor.error());
   processor_ = std::make_unique<MatchProcessor>(std::move(processor).value());
@@ -40,13 +43,29 @@ Matcher::Matcher(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& nam
   classified_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("scan_classified", 1);
   traversal_pub_ = nh_.advertise<sensor_msgs::Image>("search_traversal", 1);
 
+  scan_topic_ = nh_.resolveName("velodyne_points");
+  scans_input_ = inputs_.add(scan_topic_);
+  matches_input_ = inputs_.add("accepted matches", /*watch_silence=*/false);
+  inputs_.start(ros::WallTime::now().toSec());
+
   const ros::TransportHints hints = ros::TransportHints().tcpNoDelay();
   // A subscriber queue deeper than the session's: every scan reaches onScan, so a scan dropped
-  // under load is dropped (and counted) by the session.
-  scan_sub_ = nh_.subscribe("velodyne_points",
-                            static_cast<uint32_t>(std::max(options_.scan_subscriber_queue_size,
-                                                           options_.session.scan_queue_size + 1)),
-                            &Matcher::onScan, this, hints);
+  // under load is dropped (and counted) by the session. Each scan is seen by the silence
+  // watchdog and the stamp check first (onScan counts it in the rate).
+  const boost::function<void(const sensor_msgs::PointCloud2::ConstPtr&)> on_scan =
+      [this](const sensor_msgs::PointCloud2::ConstPtr& msg) {
+        scan_rate_.stamp(msg->header.stamp);
+        {
+          std::lock_guard<std::mutex> lock(stats_mutex_);
+          inputs_.heard(scans_input_, ros::WallTime::now().toSec());
+        }
+        onScan(msg);
+      };
+  scan_sub_ = nh_.subscribe<sensor_msgs::PointCloud2>(
+      "velodyne_points",
+      static_cast<uint32_t>(
+          std::max(options_.scan_subscriber_queue_size, options_.session.scan_queue_size + 1)),
+      on_scan, ros::VoidConstPtr(), hints);
   odom_sub_ = nh_.subscribe("odom", 200, &Matcher::onOdom, this, hints);
   posterior_sub_ = nh_.subscribe("odometry", 20, &Matcher::onPosterior, this, hints);
   initialpose_sub_ = nh_.subscribe("initialpose", 2, &Matcher::onInitialPose, this);

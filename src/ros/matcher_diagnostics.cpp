@@ -1,6 +1,8 @@
 // Matcher health on /diagnostics (matcher.h): scan and match rates, accepted share, last score
 // per point, certified share and last certificate, search time, window, chunks held, dropped scans,
-// prior mode and last reason.
+// prior mode and last reason; the scan topic's rate and stamp checks; and the console lines
+// that name the fix of a silent scan topic, a missing prior and an initial pose that is never
+// matched.
 #include <cmath>
 #include <cstdio>
 
@@ -21,10 +23,16 @@ std::string fixed(double v, int digits) {
 void Matcher::record(const MatchReport& r, uint32_t dropped) {
   std::lock_guard<std::mutex> lock(stats_mutex_);
   ++scans_;
+  const double now_s = ros::WallTime::now().toSec();
   if (r.accepted()) {
     ++accepted_;
-    match_rate_.tick();
+    inputs_.heard(matches_input_, now_s);
   }
+  acquisition_.onScan(r.prior.explicit_generation, r.outcome, r.window.half_x_m);
+  if (r.outcome != MatchOutcome::kSkipped && r.prior.explicit_generation != 0) {
+    acquisition_source_ = priorSourceName(r.prior.source);
+  }
+  if (acquisition_.due(now_s)) warnStuck(r);
   recent_accepted_.push_back(r.accepted());
   while (recent_accepted_.size() > 50) recent_accepted_.pop_front();
   if (r.accepted()) {
@@ -46,8 +54,94 @@ void Matcher::record(const MatchReport& r, uint32_t dropped) {
   last_prior_source_ = priorSourceName(r.prior.source);
 }
 
+void Matcher::warnStuck(const MatchReport& r) {
+  const PriorSource source = r.prior.source;
+  const Pose6& p = r.prior.pose;
+  const int lost_after = options_.policy.relocalization.lost_after_rejections;
+  const double global_m = options_.policy.window.global_max_half_xy_m;
+  char searched[320];
+  if (r.prior.lost) {
+    std::snprintf(searched, sizeof(searched),
+                  "the global window (+-%.1f m, the full turn: window/global_max_half_xy_m) "
+                  "included: the vehicle is probably farther from it than that",
+                  global_m);
+  } else if (lost_after > 0) {
+    std::snprintf(searched, sizeof(searched),
+                  "after %d rejections in a row (relocalization/lost_after_rejections) it "
+                  "searches +-%.1f m and the full turn around it (window/global_max_half_xy_m), "
+                  "a vehicle farther off is never matched",
+                  lost_after, global_m);
+  } else {
+    std::snprintf(searched, sizeof(searched),
+                  "it searches no wider (relocalization/lost_after_rejections is 0)");
+  }
+  std::string fix;
+  if (source == PriorSource::kConfigured) {
+    fix =
+        ", or correct the matcher's initial_pose/x, initial_pose/y, initial_pose/yaw (launch "
+        "arguments initial_x, initial_y, initial_yaw)";
+  } else if (source == PriorSource::kPreviousMatch) {
+    fix = " (the pose was the match remembered at this stamp after time went backwards)";
+  }
+  ROS_WARN(
+      "%s: no match accepted in %d scans searched around the %s pose (x %.1f, y %.1f, yaw "
+      "%.2f), up to +-%.1f m from it (last reason: %s); %s. Give a pose within a few metres of "
+      "the vehicle on /initialpose (rviz '2D Pose Estimate')%s",
+      name_.c_str(), acquisition_.rejections(), priorSourceName(source), p.x, p.y, p.yaw,
+      acquisition_.widestWindowM(), r.reason.c_str(), searched, fix.c_str());
+}
+
+void Matcher::warnInputs(double now_s) {
+  for (const InputSilence& silence : inputs_.due(now_s)) {
+    ROS_WARN(
+        "%s: no messages on %s %s: is the LIDAR driver or the bag (rosbag play --clock) "
+        "running? The matcher reads the merged cloud from `velodyne_points`, remapped to the "
+        "launch argument points_topic (merge_clouds:=true: the cloud merger's output)",
+        name_.c_str(), silence.name.c_str(),
+        silenceText(silence.ever_heard, silence.silent_for_s).c_str());
+  }
+  // Scans arrive, but there is nothing to search around.
+  const bool waiting = last_mode_ == "no_prior" && !inputs_.silent(scans_input_, now_s) &&
+                       inputs_.everHeard(scans_input_);
+  if (!waiting) {
+    no_prior_since_s_ = -1.0;
+    no_prior_line_.reset();
+    return;
+  }
+  if (no_prior_since_s_ < 0.0) no_prior_since_s_ = now_s;
+  if (now_s - no_prior_since_s_ >= inputs_.silentAfter() && no_prior_line_.due(now_s)) {
+    ROS_WARN(
+        "%s: scans arrive but there is no pose to search around: give one on /initialpose (rviz "
+        "'2D Pose Estimate'), or start from a configured pose with the matcher's "
+        "initial_pose/enabled true and initial_pose/x, initial_pose/y, initial_pose/yaw "
+        "(localization.launch use_initial_pose:=true initial_x:=... initial_y:=... "
+        "initial_yaw:=...)",
+        name_.c_str());
+  }
+}
+
 void Matcher::setupDiagnostics() {
-  diagnostics_ = std::make_unique<Diagnostics>(nh_, name_);
+  diagnostics_ = std::make_unique<Diagnostics>(nh_, pnh_, name_);
+  diagnostics_->add(scan_topic_ + " topic status", [this](StatusBuilder& s) {
+    // The watchdog's verdict first: it names the fix; then diagnostic_updater's rate and stamp
+    // checks.
+    const double now_s = ros::WallTime::now().toSec();
+    {
+      std::lock_guard<std::mutex> lock(stats_mutex_);
+      s.add("topic", scan_topic_);
+      s.add("messages received", inputs_.count(scans_input_));
+      s.add("time since last message [s]", fixed(inputs_.silentFor(scans_input_, now_s), 2));
+      if (inputs_.silent(scans_input_, now_s)) {
+        s.summary(diagnostic_msgs::DiagnosticStatus::WARN,
+                  "no messages on " + scan_topic_ + " " +
+                      silenceText(inputs_.everHeard(scans_input_),
+                                  inputs_.silentFor(scans_input_, now_s)) +
+                      " (launch argument points_topic)");
+      }
+      warnInputs(now_s);
+    }
+    scan_rate_.fill(s);
+  });
   diagnostics_->add("scan matching", [this](StatusBuilder& s) {
     size_t chunks = 0;
     uint64_t version = 0;
@@ -59,7 +153,7 @@ void Matcher::setupDiagnostics() {
       chunks = map_client_.chunks().size();
       version = map_client_.mapVersion();
       have_index = map_client_.hasIndex();
-      ignored_indices = map_client_.ignoredIndices();
+      ignored_indices = map_client_.ignoredIndices() + map_client_.rejectedIndices();
       map_publisher = map_client_.publisher();
     }
     uint64_t dropped_total = 0;
@@ -68,8 +162,9 @@ void Matcher::setupDiagnostics() {
       dropped_total = session_.droppedTotal();
     }
     std::lock_guard<std::mutex> lock(stats_mutex_);
-    scan_rate_.fill(s, "scan");
-    s.add("match (accepted) rate [Hz]", fixed(match_rate_.rateHz(), 2));
+    const double now_s = ros::WallTime::now().toSec();
+    s.add("scan rate [Hz]", fixed(inputs_.rateHz(scans_input_, now_s), 2));
+    s.add("match (accepted) rate [Hz]", fixed(inputs_.rateHz(matches_input_, now_s), 2));
     size_t ok = 0;
     for (bool a : recent_accepted_) ok += a ? 1 : 0;
     const double share =
@@ -106,10 +201,19 @@ void Matcher::setupDiagnostics() {
     s.add("prior mode", last_mode_);
     s.add("prior source", last_prior_source_);
     s.add("last reason", last_reason_);
+    s.add("rejected scans around the explicit pose", acquisition_.rejections());
     if (!have_index || chunks == 0) {
       s.summary(diagnostic_msgs::DiagnosticStatus::WARN, "no map (no chunks received)");
     } else if (last_mode_ == "no_prior") {
-      s.summary(diagnostic_msgs::DiagnosticStatus::WARN, "no prior: waiting for an initial pose");
+      s.summary(diagnostic_msgs::DiagnosticStatus::WARN,
+                "no prior: waiting for an initial pose (/initialpose or initial_pose/*)");
+    } else if (acquisition_.stuck()) {
+      s.summary(diagnostic_msgs::DiagnosticStatus::WARN,
+                "no match in " + std::to_string(acquisition_.rejections()) + " scans around the " +
+                    acquisition_source_ +
+                    " pose: give a pose near the vehicle on /initialpose (or correct "
+                    "initial_pose/x, y, yaw): " +
+                    last_reason_);
     } else if (recent_accepted_.size() >= 5 && share < options_.min_accepted_share) {
       s.summary(diagnostic_msgs::DiagnosticStatus::WARN, "few matches accepted: " + last_reason_);
     } else if (recent_certified_.size() >= 5 && certified_share < options_.min_accepted_share) {

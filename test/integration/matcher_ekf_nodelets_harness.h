@@ -20,6 +20,7 @@
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
 #include <rosgraph_msgs/Clock.h>
+#include <rosgraph_msgs/Log.h>
 #include <sensor_msgs/Imu.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <tf2_ros/buffer.h>
@@ -80,6 +81,9 @@ class Harness {
     status_sub_ = nh_.subscribe("/status", 200, &Harness::onStatus, this);
     odometry_sub_ = nh_.subscribe("/odometry", 200, &Harness::onOdometry, this);
     diagnostics_sub_ = nh_.subscribe("/diagnostics", 50, &Harness::onDiagnostics, this);
+    diagnostics_agg_sub_ =
+        nh_.subscribe("/diagnostics_agg", 10, &Harness::onAggregatedDiagnostics, this);
+    rosout_sub_ = nh_.subscribe("/rosout", 500, &Harness::onLog, this);
     buildWorld();
     thread_ = std::thread([this] { run(); });
   }
@@ -145,6 +149,10 @@ class Harness {
   std::vector<MatchStatus> statuses_;
   std::vector<nav_msgs::Odometry> odometry_;
   std::set<std::string> diagnostic_names_;
+  /// Every status seen, with the wall time it arrived [s].
+  std::vector<std::pair<double, diagnostic_msgs::DiagnosticStatus>> diagnostics_;
+  std::vector<diagnostic_msgs::DiagnosticStatus> aggregated_;  ///< the last /diagnostics_agg
+  std::vector<std::pair<double, rosgraph_msgs::Log>> logs_;    ///< /rosout, with wall time [s]
   bool non_finite_ = false;
   std::string non_finite_what_;
   tf2_ros::Buffer tf_buffer_;
@@ -229,7 +237,19 @@ class Harness {
   }
   void onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstPtr& m) {
     std::lock_guard<std::mutex> lock(mutex_);
-    for (const auto& st : m->status) diagnostic_names_.insert(st.name);
+    const double now = ros::WallTime::now().toSec();
+    for (const auto& st : m->status) {
+      diagnostic_names_.insert(st.name);
+      diagnostics_.emplace_back(now, st);
+    }
+  }
+  void onAggregatedDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstPtr& m) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    aggregated_ = m->status;
+  }
+  void onLog(const rosgraph_msgs::Log::ConstPtr& m) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    logs_.emplace_back(ros::WallTime::now().toSec(), *m);
   }
   void flag(const char* what) {
     non_finite_ = true;
@@ -239,7 +259,8 @@ class Harness {
   ros::NodeHandle nh_;
   tf2_ros::TransformListener tf_listener_;
   ros::Publisher clock_pub_, scan_pub_, odom_pub_, imu_pub_, index_pub_, chunk_pub_;
-  ros::Subscriber pose_sub_, status_sub_, odometry_sub_, diagnostics_sub_;
+  ros::Subscriber pose_sub_, status_sub_, odometry_sub_, diagnostics_sub_, diagnostics_agg_sub_;
+  ros::Subscriber rosout_sub_;
   ChunkMap chunks_;
   sensor_msgs::PointCloud2 scan_msg_;
   ros::WallTime wall_start_ = ros::WallTime::now();

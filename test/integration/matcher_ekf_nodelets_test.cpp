@@ -4,8 +4,11 @@
 // scans from a known, fixed pose. The tests run in order on one running system.
 #include "matcher_ekf_nodelets_harness.h"
 
+#include <algorithm>
 #include <functional>
+#include <set>
 #include <string>
+#include <vector>
 
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <gtest/gtest.h>
@@ -46,6 +49,61 @@ bool waitForStatus(const ros::Time& stamp, const std::function<bool(const MatchS
         });
       },
       timeout_s);
+}
+
+using StatusPred = std::function<bool(const diagnostic_msgs::DiagnosticStatus&)>;
+
+double wallNow() { return ros::WallTime::now().toSec(); }
+
+/// Whether a status named `name` that satisfies `pred` arrived after wall time `since`.
+bool sawDiagnostic(const std::string& name, double since, const StatusPred& pred,
+                   diagnostic_msgs::DiagnosticStatus* found = nullptr) {
+  return harness->locked([&] {
+    for (const auto& [wall, st] : harness->diagnostics_) {
+      if (wall >= since && st.name == name && pred(st)) {
+        if (found != nullptr) *found = st;
+        return true;
+      }
+    }
+    return false;
+  });
+}
+
+/// The messages of the statuses named `name` since `since`, for failure output.
+std::string describeDiagnostics(const std::string& name, double since) {
+  return harness->locked([&] {
+    std::string all;
+    const diagnostic_msgs::DiagnosticStatus* last = nullptr;
+    for (const auto& [wall, st] : harness->diagnostics_) {
+      if (wall >= since && st.name == name) {
+        all += "\n  level " + std::to_string(st.level) + ": " + st.message;
+        last = &st;
+      }
+    }
+    if (last == nullptr) return std::string(" none named '") + name + "'";
+    all += "\n  the last one's keys:";
+    for (const auto& kv : last->values) all += " '" + kv.key + "'";
+    return all;
+  });
+}
+
+/// Whether a WARN (or worse) log line containing every one of `texts` arrived after `since`.
+bool sawWarning(const std::vector<std::string>& texts, double since) {
+  return harness->locked([&] {
+    for (const auto& [wall, log] : harness->logs_) {
+      if (wall < since || log.level < rosgraph_msgs::Log::WARN) continue;
+      if (std::all_of(texts.begin(), texts.end(),
+                      [&](const std::string& t) { return log.msg.find(t) != std::string::npos; })) {
+        return true;
+      }
+    }
+    return false;
+  });
+}
+
+bool warnsWith(const diagnostic_msgs::DiagnosticStatus& s, const std::string& text) {
+  return s.level >= diagnostic_msgs::DiagnosticStatus::WARN &&
+         s.message.find(text) != std::string::npos;
 }
 
 TEST(MatcherEkfNodelets, AcceptedPoseWithinToleranceAndTheEkfFollows) {
@@ -198,6 +256,100 @@ TEST(MatcherEkfNodelets, DebugOutputsAndDiagnostics) {
            for (const auto& n : harness->diagnostic_names_) all += "'" + n + "' ";
            return all;
          });
+  // The standard rate and stamp checks of each input topic (diagnostic_updater's
+  // FrequencyStatus and TimeStampStatus), named like diagnostic_updater::TopicDiagnostic's.
+  const char* kScanTopic = "/matcher: /velodyne_points topic status";
+  auto has_key = [](const diagnostic_msgs::DiagnosticStatus& s, const std::string& key) {
+    return std::any_of(s.values.begin(), s.values.end(),
+                       [&](const diagnostic_msgs::KeyValue& kv) { return kv.key == key; });
+  };
+  diagnostic_msgs::DiagnosticStatus scan_topic;
+  EXPECT_TRUE(Harness::waitFor(
+      [&] {
+        return sawDiagnostic(
+            kScanTopic, 0.0,
+            [&](const diagnostic_msgs::DiagnosticStatus& s) {
+              return has_key(s, "Actual frequency (Hz)") && has_key(s, "Latest timestamp delay");
+            },
+            &scan_topic);
+      },
+      10.0))
+      << "no rate and stamp checks in the scan topic status: "
+      << describeDiagnostics(kScanTopic, 0.0);
+  EXPECT_TRUE(has("/ekf: /imu topic status") && has("/ekf: /odom topic status"));
+  EXPECT_EQ(scan_topic.hardware_id, "/matcher");
+
+  // diagnostic_aggregator with config/analyzers.yaml (started by the .test) groups them.
+  auto aggregated = [](const std::string& name) {
+    return harness->locked([&] {
+      for (const auto& st : harness->aggregated_) {
+        if (st.name == name) return true;
+      }
+      return false;
+    });
+  };
+  EXPECT_TRUE(Harness::waitFor(
+      [&] {
+        // The task's name under its nodelet's path (analyzers.yaml: remove_prefix).
+        return aggregated("/Localization") && aggregated("/Localization/Matcher/scan matching") &&
+               aggregated("/Localization/Matcher/velodyne_points topic status") &&
+               aggregated("/Localization/EKF/filter") && aggregated("/Localization/EKF/inputs");
+      },
+      10.0))
+      << "/diagnostics_agg: " << harness->locked([] {
+           std::string all;
+           for (const auto& st : harness->aggregated_) {
+             all += "'" + st.name + "' (" + std::to_string(st.level) + ": " + st.message + ") ";
+           }
+           return all;
+         });
+}
+
+TEST(MatcherEkfNodelets, ASilentScanTopicIsNamedInTheDiagnosticsAndOnTheConsole) {
+  // The scans stop (a driver that died, a bag not played): after 5 s the scan topic's status
+  // and a console line name the topic and the launch argument that sets it.
+  const char* kScanTopic = "/matcher: /velodyne_points topic status";
+  const double since = wallNow();
+  harness->setStreaming(false);
+  diagnostic_msgs::DiagnosticStatus st;
+  ASSERT_TRUE(Harness::waitFor(
+      [&] {
+        return sawDiagnostic(
+            kScanTopic, since,
+            [](const diagnostic_msgs::DiagnosticStatus& s) {
+              return warnsWith(s, "no messages on /velodyne_points for") &&
+                     warnsWith(s, "No events recorded.");
+            },
+            &st);
+      },
+      12.0))
+      << describeDiagnostics(kScanTopic, since);
+  EXPECT_NE(st.message.find("points_topic"), std::string::npos) << st.message;
+  // Not before 5 s of silence (the last scan went out at most 0.2 s before `since`).
+  const double first = harness->locked([&] {
+    for (const auto& [wall, d] : harness->diagnostics_) {
+      if (wall >= since && d.name == kScanTopic && warnsWith(d, "no messages on")) return wall;
+    }
+    return -1.0;
+  });
+  EXPECT_GE(first - since, 4.5) << "the silence was reported too early";
+  EXPECT_TRUE(sawWarning({"no messages on /velodyne_points for", "points_topic"}, since))
+      << "no console line for the silent scan topic";
+
+  // Scans again: matched again.
+  harness->setStreaming(true);
+  const double resumed = harness->simNow();
+  EXPECT_TRUE(Harness::waitFor(
+      [&] {
+        return harness->locked([&] {
+          for (const MatchStatus& s : harness->statuses_) {
+            if (s.header.stamp.toSec() > resumed && s.accepted) return true;
+          }
+          return false;
+        });
+      },
+      20.0))
+      << "no accepted match after the scans came back";
 }
 
 TEST(MatcherEkfNodelets, RelocalizeWidensTheWindowAndInitialPoseIsSearched) {
@@ -246,6 +398,7 @@ TEST(MatcherEkfNodelets, RelocalizeWidensTheWindowAndInitialPoseIsSearched) {
     return click.header.stamp.toSec();
   };
   // A click 500 m away, off the map: statuses say so, nothing is published from there.
+  const double off_map_wall = wallNow();
   const double off_map = publishClick(500.0, 0.0);
   MatchStatus off;
   ASSERT_TRUE(Harness::waitFor(
@@ -263,6 +416,23 @@ TEST(MatcherEkfNodelets, RelocalizeWidensTheWindowAndInitialPoseIsSearched) {
       10.0));
   EXPECT_FALSE(off.accepted);
   EXPECT_NE(off.reason.find("off the map"), std::string::npos) << off.reason;
+  // Rejected scan after scan from there (the global search of the lost mode included), none
+  // accepted: the matcher tells the user to give a pose near the vehicle on /initialpose.
+  const char* kMatching = "/matcher: scan matching";
+  EXPECT_TRUE(Harness::waitFor(
+      [&] {
+        return sawDiagnostic(kMatching, off_map_wall,
+                             [](const diagnostic_msgs::DiagnosticStatus& s) {
+                               return warnsWith(s, "scans around the initialpose pose") &&
+                                      warnsWith(s, "/initialpose");
+                             });
+      },
+      20.0))
+      << describeDiagnostics(kMatching, off_map_wall);
+  EXPECT_TRUE(sawWarning({"no match accepted in", "around the initialpose pose (x 502.",
+                          "a pose within a few metres of the vehicle on /initialpose"},
+                         off_map_wall))
+      << "no console line for the initial pose that is never matched";
 
   // rviz "2D Pose Estimate", 2 m off (z = 0: completed from the posterior).
   const double click_stamp = publishClick(-1.5, 1.3);

@@ -1,25 +1,39 @@
 #pragma once
-// A small diagnostics publisher in the spirit of diagnostic_updater (not packaged in Debian):
-// named tasks fill a DiagnosticStatus, published on /diagnostics at a fixed period; a frequency
-// monitor and a stamp-age monitor cover the usual "rate and timestamp" checks.
+// Diagnostics on /diagnostics through the standard diagnostic_updater (Debian:
+// libdiagnostic-updater-dev): a diagnostic_updater::Updater per nodelet publishes the named
+// tasks, and each input topic's rate and stamp age are checked by diagnostic_updater's
+// FrequencyStatus and TimeStampStatus (the two halves of diagnostic_updater::TopicDiagnostic).
+//
+// Status names are "<nodelet name>: <task>", e.g. "/localization/matcher: scan matching" (the
+// nodelet's name, not its manager's: all nodelets of a manager share one ROS node name), the
+// hardware_id is the nodelet name. They are published every second of wall time, so that they
+// keep coming while a bag's clock is paused. config/analyzers.yaml groups them for
+// diagnostic_aggregator (launch/localization.launch diagnostics_aggregator:=true).
 
-#include <deque>
+#include <atomic>
+#include <cstdint>
 #include <functional>
-#include <mutex>
+#include <memory>
 #include <string>
-#include <vector>
 
-#include <diagnostic_msgs/DiagnosticArray.h>
+#include <diagnostic_msgs/DiagnosticStatus.h>
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <diagnostic_updater/update_functions.h>
 #include <ros/ros.h>
 
 namespace gmm_localization {
 namespace node {
 
-/// Builds one status: level, message and key-value pairs.
+/// Fills one status: level, message and key-value pairs.
 class StatusBuilder {
  public:
-  /// Raises the level to `level` (never lowers it) and, when raised, sets the message.
+  explicit StatusBuilder(diagnostic_updater::DiagnosticStatusWrapper& status) : status_(status) {}
+  /// Raises the level to `level` (never lowers it) and, when raised, sets the message: the first
+  /// problem found names the status.
   void summary(uint8_t level, const std::string& message);
+  /// Merges a check's verdict as diagnostic_updater's composite tasks do (mergeSummary): the
+  /// worse level; the messages of problems joined with "; ".
+  void merge(uint8_t level, const std::string& message);
   template <typename T>
   void add(const std::string& key, const T& value) {
     add(key, std::to_string(value));
@@ -30,39 +44,54 @@ class StatusBuilder {
   diagnostic_msgs::DiagnosticStatus& status() { return status_; }
 
  private:
-  diagnostic_msgs::DiagnosticStatus status_;
+  diagnostic_updater::DiagnosticStatusWrapper& status_;
 };
 
-/// Counts events and reports their rate over a sliding window against [min_hz, max_hz].
+/// Rate and stamp-age checks of one topic: diagnostic_updater::FrequencyStatus (messages per
+/// second over the last 5 updates against [min_hz, max_hz] with 10 % tolerance; ERROR "No events
+/// recorded." when none came) and, once stamps are given, TimeStampStatus (ERROR when a stamp
+/// lies more than max_delay_s behind the ROS clock or min_delay_s ahead of it; a bag played
+/// without --clock, or use_sim_time forgotten, shows here). Thread-safe.
 class FrequencyMonitor {
  public:
-  FrequencyMonitor(double min_hz, double max_hz, double window_s = 5.0)
-      : min_hz_(min_hz), max_hz_(max_hz), window_s_(window_s) {}
-  void tick(const ros::WallTime& now = ros::WallTime::now());
-  void fill(StatusBuilder& s, const std::string& what);
-  double rateHz(const ros::WallTime& now = ros::WallTime::now());
+  FrequencyMonitor(double min_hz, double max_hz, double max_delay_s = 5.0,
+                   double min_delay_s = -1.0);
+  /// One message (rate).
+  void tick() { frequency_->tick(); }
+  /// The stamp of one message (its age against ros::Time::now()); counted in the rate by tick().
+  void stamp(const ros::Time& stamp);
+  /// Runs both checks into s (their keys, their verdict merged). Each run ends the checks'
+  /// window: call it from one status only, once per update.
+  void fill(StatusBuilder& s);
 
  private:
-  std::mutex mutex_;
-  std::deque<ros::WallTime> events_;
-  double min_hz_, max_hz_, window_s_;
+  double min_hz_, max_hz_;  ///< FrequencyStatusParam points at these
+  std::unique_ptr<diagnostic_updater::FrequencyStatus> frequency_;
+  std::unique_ptr<diagnostic_updater::TimeStampStatus> stamps_;
+  std::atomic<bool> stamped_{false};
 };
+
+/// "for 6.2 s" (an input heard before), or "in the 5.0 s since start-up" (never heard).
+std::string silenceText(bool ever_heard, double silent_for_s);
 
 class Diagnostics {
  public:
   using Task = std::function<void(StatusBuilder&)>;
-  /// hardware_id: e.g. the nodelet name. Publishes on /diagnostics every period_s.
-  Diagnostics(ros::NodeHandle& nh, const std::string& hardware_id, double period_s = 1.0);
+  /// hardware_id: the nodelet's name, which also prefixes the status names. pnh: the nodelet's
+  /// private handle (diagnostic_updater reads ~diagnostic_period there; the statuses are
+  /// published every period_s of wall time here).
+  Diagnostics(const ros::NodeHandle& nh, const ros::NodeHandle& pnh, const std::string& hardware_id,
+              double period_s = 1.0);
+  /// A status named "<hardware_id>: <name>"; the task starts from OK with no message ("OK" when
+  /// it sets none).
   void add(const std::string& name, Task task);
   /// Publishes now (also called by the timer).
   void update();
 
  private:
-  ros::Publisher pub_;
+  // Declared before the timer, destroyed after it: no update runs on a dead updater.
+  diagnostic_updater::Updater updater_;
   ros::WallTimer timer_;
-  std::string hardware_id_;
-  std::vector<std::pair<std::string, Task>> tasks_;
-  std::mutex mutex_;
 };
 
 }  // namespace node

@@ -29,6 +29,9 @@
 // filter until an initial pose or a match;
 // consecutive gate rejections inflate the covariance (see LocalizationFilter). Nothing
 // non-finite is ever published. Callbacks and the timer run serialised on the nodelet's queue.
+// Diagnostics (ekf_node_diagnostics.cpp): "filter", "inputs" and "<topic> topic status" of the
+// IMU and the INS odometry (rate and stamp age, diagnostics.h); an input silent for 5 s gets a
+// console line naming the topic and the launch argument or parameter that fixes it.
 
 #include <map>
 #include <memory>
@@ -45,6 +48,7 @@
 #include <tf2_ros/transform_broadcaster.h>
 #include <tf2_ros/transform_listener.h>
 
+#include "gmm_localization/core/common/input_watchdog.h"
 #include "gmm_localization/core/localization/localization_filter.h"
 #include "gmm_localization/core/localization/prior_tracker.h"
 #include "gmm_localization/ros/diagnostics.h"
@@ -75,6 +79,8 @@ class EkfNode {
   std::optional<Eigen::Isometry3d> mapToOdom(const EkfState& now_state);
   // ekf_node_diagnostics.cpp
   void setupDiagnostics();
+  /// The console lines of the inputs silent for 5 s (inputs_); needs mutex_.
+  void warnSilentInputs(double now_s);
 
   const std::string name_;
   ros::NodeHandle nh_, pnh_;
@@ -92,8 +98,11 @@ class EkfNode {
   std::mutex mutex_;  ///< everything below (the diagnostics timer runs on its own queue)
   std::map<std::string, Eigen::Quaterniond> imu_rotations_;
   std::optional<OdometrySample> last_odom_;
-  FrequencyMonitor imu_rate_, odom_rate_, match_rate_;
-  ros::WallTime last_imu_wall_, last_odom_wall_, last_match_wall_, last_fused_match_wall_;
+  FrequencyMonitor imu_rate_, odom_rate_;  ///< the topics' rate and stamps (thread-safe)
+  std::string imu_topic_, odom_topic_;     ///< resolved
+  InputWatchdog inputs_;                   ///< wall time
+  size_t imu_input_ = 0, odom_input_ = 0, match_input_ = 0;
+  ros::WallTime last_fused_match_wall_;
   double last_fused_match_stamp_s_ = NAN;
   ros::Time last_stamp_;  ///< of the last published estimate
   uint64_t bad_inputs_ = 0, published_ = 0, publish_failures_ = 0;

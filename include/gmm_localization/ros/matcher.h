@@ -24,6 +24,11 @@
 //   obstacles        sensor_msgs/PointCloud2 of obstacle points (obstacles_frame)  [on demand]
 //   scan_classified  sensor_msgs/PointCloud2, scan in map with mahalanobis + class [on demand]
 //   search_traversal sensor_msgs/Image, the branch-and-bound traversal (Fig. 9)   [on demand]
+// Diagnostics (matcher_diagnostics.cpp): "scan matching" and "<scan topic> topic status" (rate
+// and stamp age, diagnostics.h). Console lines naming the fix: no scans for 5 s (the topic and
+// the launch argument points_topic), scans but no pose to search around (/initialpose,
+// initial_pose/*), and an explicit pose rejected scan after scan with none accepted, even by
+// the global search once lost (core/localization/acquisition_watch.h).
 // Threads: ROS callbacks (serialised, non-blocking) and one worker. Scans wait in the session's
 // queue (scan_queue_size, oldest dropped when full, drops counted in the next status); the
 // worker takes the oldest. The session is not synchronised: session_mutex_ guards every call,
@@ -47,6 +52,8 @@
 
 #include "gmm_localization/MapIndex.h"
 #include "gmm_localization/RasterChunk.h"
+#include "gmm_localization/core/common/input_watchdog.h"
+#include "gmm_localization/core/localization/acquisition_watch.h"
 #include "gmm_localization/core/localization/match_processor.h"
 #include "gmm_localization/core/localization/match_session.h"
 #include "gmm_localization/ros/diagnostics.h"
@@ -91,6 +98,10 @@ class Matcher {
   // matcher_diagnostics.cpp
   void setupDiagnostics();
   void record(const MatchReport& report, uint32_t dropped);
+  /// The console line of an explicit pose that is stuck (acquisition_), needs stats_mutex_.
+  void warnStuck(const MatchReport& report);
+  /// The silent-input and no-prior lines, from the diagnostics timer; needs stats_mutex_.
+  void warnInputs(double now_s);
 
   const std::string name_;
   ros::NodeHandle nh_, pnh_;
@@ -117,9 +128,16 @@ class Matcher {
 
   std::thread worker_;
 
-  // Diagnostics (stats_mutex_).
+  // Diagnostics (stats_mutex_; scan_rate_ is thread-safe on its own).
   std::mutex stats_mutex_;
-  FrequencyMonitor scan_rate_, match_rate_;
+  FrequencyMonitor scan_rate_;  ///< the scan topic's rate and stamps
+  std::string scan_topic_;      ///< resolved
+  InputWatchdog inputs_;        ///< wall time
+  size_t scans_input_ = 0, matches_input_ = 0;
+  AcquisitionWatch acquisition_;
+  std::string acquisition_source_;  ///< prior source of the explicit pose it counts
+  LineThrottle no_prior_line_{30.0};
+  double no_prior_since_s_ = -1.0;  ///< wall time the prior mode became no_prior with scans
   std::deque<bool> recent_accepted_;
   std::deque<bool> recent_certified_;  ///< of the accepted matches
   uint64_t certified_ = 0;
