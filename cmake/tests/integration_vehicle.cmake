@@ -6,13 +6,17 @@
 #  - vehicle_replay:     replay.launch plays the drive; the EKF ends within 0.3 m and 1 deg of
 #                        the truth, statuses per scan, odometry at its rate;
 #  - vehicle_robustness: localization.launch under missing TF, IMU and INS dropouts, a vehicle
-#                        off the map (the test node plays the drive with those faults).
+#                        off the map (the test node plays the drive with those faults);
+#  - vehicle_bad_input:  localization.launch against the bad-input matrix (bad clouds, stamps,
+#                        NaN inputs, a rogue map index, broken map directories) while it drives.
 find_package(rostest REQUIRED)
 find_package(roslaunch REQUIRED)
 
 roslaunch_add_file_check(launch/localization.launch map:=/tmp/no_map)
 roslaunch_add_file_check(launch/localization.launch map:=/tmp/no_map merge_clouds:=true rviz:=true
-  use_initial_pose:=true)
+  use_initial_pose:=true diagnostics_aggregator:=true)
+roslaunch_add_file_check(launch/localization.launch map:=/tmp/no_map ins_adapter:=true
+  ins_driver:=clearpath_applanix_bridge)
 roslaunch_add_file_check(launch/replay.launch map:=/tmp/no_map bag:=/tmp/no.bag)
 roslaunch_add_file_check(launch/replay.launch map:=/tmp/no_map bag:=/tmp/no.bag
   record:=/tmp/out.bag rviz:=true merge_clouds:=true)
@@ -33,7 +37,7 @@ endif()
 
 set(GMM_VEHICLE_NODELETS gmm_map_server_nodelet gmm_matcher_nodelet gmm_ekf_nodelet
   gmm_cloud_merger_nodelet)
-foreach(name nodelets replay robustness)
+foreach(name nodelets replay robustness bad_input)
   add_executable(rostest_vehicle_${name} EXCLUDE_FROM_ALL
     test/integration/vehicle_${name}_test.cpp)
   target_link_libraries(rostest_vehicle_${name} gmm_ros ${GTEST_LIBRARIES})

@@ -154,6 +154,8 @@ MatcherOptions loadMatcherOptions(const ParamSource& pnh) {
       param(pnh, "odometry_max_extrapolation_s", s.odometry_max_extrapolation_s, 0.0, 10.0);
   s.time_backwards_tolerance_s =
       param(pnh, "time_backwards_tolerance_s", s.time_backwards_tolerance_s, 0.0, kBig);
+  s.max_scan_ahead_s = param(pnh, "max_scan_ahead_s", s.max_scan_ahead_s, 0.0, kBig);
+  s.max_scan_age_s = param(pnh, "max_scan_age_s", s.max_scan_age_s, 0.0, kBig);
   s.scan_queue_size = param(pnh, "scan_queue_size", s.scan_queue_size, 1, 100);
 
   o.initial_pose_enabled = param(pnh, "initial_pose/enabled", o.initial_pose_enabled);

@@ -21,8 +21,16 @@ void Matcher::onScan(const sensor_msgs::PointCloud2::ConstPtr& msg) {
   bool recalled = false;
   {
     std::lock_guard<std::mutex> lock(session_mutex_);
-    arrival = session_.onScanArrival(msg->header.stamp.toSec());
+    // No clock yet (sim time before the first /clock): no clock check.
+    const ros::Time clock = ros::Time::now();
+    arrival =
+        session_.onScanArrival(msg->header.stamp.toSec(), clock.isZero() ? NAN : clock.toSec());
     recalled = session_.lastResetRecalled();
+  }
+  if (!arrival.refused.empty()) {  // a stamp far from the clock: answered, nothing changed
+    ROS_WARN_THROTTLE(5.0, "%s: %s", name_.c_str(), arrival.refused.c_str());
+    publishSkipped(msg->header.stamp, arrival.refused, 0);
+    return;
   }
   if (arrival.timeWentBackwards()) {
     {
@@ -105,6 +113,12 @@ bool Matcher::scanToBase(const sensor_msgs::PointCloud2& msg, ScanInput* scan,
   scan->stamp_s = msg.header.stamp.toSec();
   scan->points = std::move(cloud->points);
   scan->time_s = std::move(cloud->time_s);
+  scan->time_source = describePointTimes(*cloud);
+  scan->time_problem = std::move(cloud->time_problem);
+  if (!scan->time_problem.empty() && options_.session.deskew) {
+    ROS_WARN_THROTTLE(30.0, "%s: scan not deskewed: %s. Driver fix: %s", name_.c_str(),
+                      scan->time_problem.c_str(), pointTimeFixHint());
+  }
   if (!msg.header.frame_id.empty() && msg.header.frame_id != options_.base_frame) {
     try {
       const auto t = tf_buffer_.lookupTransform(options_.base_frame, msg.header.frame_id,

@@ -30,7 +30,6 @@ constexpr double kOffMapAt = 12.5, kBackAt = 14.5;
 constexpr double kTolXyM = 0.3, kTolYawRad = 1.0 * M_PI / 180.0;
 const char* kEkfInputs = "/localization/ekf: inputs";
 const char* kMatcherDiag = "/localization/matcher: scan matching";
-const char* kChunksDiag = "/localization/map_server: chunks";
 const char* kPositionDiag = "/localization/map_server: vehicle position";
 
 std::unique_ptr<Outputs> outputs;
@@ -72,23 +71,8 @@ Pose6 offsetTruth(double rel_s, double dx, double dy, double dyaw_deg) {
   return p;
 }
 
-/// The map server has rasterized every chunk it wants, in a status that arrived after `since`.
 bool mapReadySince(double since, double timeout_s) {
-  return waitFor(
-      [&] {
-        return outputs->sawDiagnostic(
-            kChunksDiag,
-            [](const diagnostic_msgs::DiagnosticStatus& s) {
-              std::string held, pending;
-              for (const auto& kv : s.values) {
-                if (kv.key == "chunks held") held = kv.value;
-                if (kv.key == "chunks pending") pending = kv.value;
-              }
-              return pending == "0" && !held.empty() && held != "0";
-            },
-            since);
-      },
-      timeout_s);
+  return outputs->mapReadySince(since, timeout_s);
 }
 
 template <typename Pred>
@@ -260,30 +244,10 @@ TEST(VehicleRobustness, RecoversAndEndsLocalized) {
   const double end_rel = (player->end() - player->start()).toSec();
   EXPECT_GE(countStatuses(kBackAt, end_rel, [](const MatchStatus& s) { return s.accepted; }), 10u)
       << describeStatuses(kBackAt, end_rel);
-  // The last estimate the truth covers (the clock ends with the bag's last IMU sample, a few ms
-  // after its last ground truth).
-  PoseError e;
-  outputs->locked([&] {
-    for (auto it = outputs->odometry_.rbegin(); it != outputs->odometry_.rend() && !e.valid();
-         ++it) {
-      e = poseError(player->truth(), it->header.stamp.toSec(), toPose(it->pose.pose));
-    }
-    return 0;
-  });
-  ASSERT_TRUE(e.valid()) << "no EKF odometry within the ground truth's time span";
-  std::printf("[vehicle_robustness] final EKF error %.3f m, %.3f deg\n", e.xy_m,
-              e.yaw_rad * 180.0 / M_PI);
-  EXPECT_LE(e.xy_m, kTolXyM);
-  EXPECT_LE(e.yaw_rad, kTolYawRad);
+  expectEndsLocalized(*outputs, player->truth(), "vehicle_robustness", kTolXyM, kTolYawRad);
 }
 
-TEST(VehicleRobustness, NothingNonFiniteWasPublished) {
-  outputs->locked([] {
-    EXPECT_FALSE(outputs->non_finite_) << outputs->non_finite_what_;
-    EXPECT_FALSE(outputs->odometry_.empty());
-    return 0;
-  });
-}
+TEST(VehicleRobustness, NothingNonFiniteWasPublished) { expectNothingNonFinite(*outputs); }
 
 }  // namespace
 }  // namespace node

@@ -83,6 +83,11 @@ class FaultyPlayer {
   }
   /// Holds the clock where it is / lets it run again.
   void hold(bool on) { held_ = on; }
+  /// The last scan published (null before the first), as it went out.
+  sensor_msgs::PointCloud2ConstPtr lastScan() const {
+    std::lock_guard<std::mutex> lock(scan_mutex_);
+    return last_scan_;
+  }
   /// Before play(): publishes the bag's start time on /clock (nodes on sim time wait for it).
   void publishStartClock() { publishClock(start_); }
 
@@ -122,6 +127,8 @@ class FaultyPlayer {
         const double stamp_rel = (cloud->header.stamp - start_).toSec();
         if (Faults::any(faults_.unknown_frame, stamp_rel)) cloud->header.frame_id = kUnknownFrame;
         scan_pub_.publish(cloud);
+        std::lock_guard<std::mutex> lock(scan_mutex_);
+        last_scan_ = cloud;
       } else if (topic == "/imu/data") {
         if (!Faults::any(faults_.no_imu, rel)) imu_pub_.publish(m.instantiate<sensor_msgs::Imu>());
       } else if (topic == "/ins/odom") {
@@ -146,6 +153,8 @@ class FaultyPlayer {
   std::thread thread_;
   std::atomic<bool> stop_{false}, held_{false}, finished_{false};
   std::atomic<double> elapsed_{0.0};
+  mutable std::mutex scan_mutex_;
+  sensor_msgs::PointCloud2ConstPtr last_scan_;
 };
 
 }  // namespace vehicle_test

@@ -5,6 +5,7 @@
 // log lines, ground truth interpolation and waiting helpers.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <map>
 #include <mutex>
@@ -14,6 +15,7 @@
 
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
+#include <gtest/gtest.h>
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
 #include <rosgraph_msgs/Log.h>
@@ -158,6 +160,26 @@ class Outputs {
     return false;
   }
   /// Every diagnostic name seen.
+  /// The map server has rasterized every chunk it wants, in a status that arrived after
+  /// `since_s` (wall time); waits up to timeout_s.
+  bool mapReadySince(double since_s, double timeout_s) {
+    return waitFor(
+        [&] {
+          return sawDiagnostic(
+              "/localization/map_server: chunks",
+              [](const diagnostic_msgs::DiagnosticStatus& s) {
+                std::string held, pending;
+                for (const auto& kv : s.values) {
+                  if (kv.key == "chunks held") held = kv.value;
+                  if (kv.key == "chunks pending") pending = kv.value;
+                }
+                return pending == "0" && !held.empty() && held != "0";
+              },
+              since_s);
+        },
+        timeout_s);
+  }
+
   std::vector<std::string> diagnosticNames() {
     std::lock_guard<std::mutex> lock(mutex_);
     std::vector<std::string> names;
@@ -236,6 +258,39 @@ class Outputs {
   std::vector<SeenDiagnostic> diagnostic_history_;
   std::vector<std::pair<double, rosgraph_msgs::Log>> logs_;
 };
+
+/// The error of the last EKF estimate the truth covers (the clock ends with the bag's last IMU
+/// sample, a few ms after its last ground truth); invalid when there is none.
+inline PoseError lastEkfError(Outputs& outputs, const Truth& truth) {
+  PoseError e;
+  outputs.locked([&] {
+    for (auto it = outputs.odometry_.rbegin(); it != outputs.odometry_.rend() && !e.valid(); ++it) {
+      e = poseError(truth, it->header.stamp.toSec(), toPose(it->pose.pose));
+    }
+    return 0;
+  });
+  return e;
+}
+
+/// The drive ended localized: the last EKF estimate within tol_xy_m and tol_yaw_rad (printed
+/// with `test`'s name).
+inline void expectEndsLocalized(Outputs& outputs, const Truth& truth, const char* test,
+                                double tol_xy_m, double tol_yaw_rad) {
+  const PoseError e = lastEkfError(outputs, truth);
+  ASSERT_TRUE(e.valid()) << "no EKF odometry within the ground truth's time span";
+  std::printf("[%s] final EKF error %.3f m, %.3f deg\n", test, e.xy_m, e.yaw_rad * 180.0 / M_PI);
+  EXPECT_LE(e.xy_m, tol_xy_m);
+  EXPECT_LE(e.yaw_rad, tol_yaw_rad);
+}
+
+/// Nothing non-finite was published, and the EKF published at all.
+inline void expectNothingNonFinite(Outputs& outputs) {
+  outputs.locked([&] {
+    EXPECT_FALSE(outputs.non_finite_) << outputs.non_finite_what_;
+    EXPECT_FALSE(outputs.odometry_.empty());
+    return 0;
+  });
+}
 
 }  // namespace vehicle_test
 }  // namespace node

@@ -75,7 +75,17 @@ void LocalizerPipeline::addScan(ScanInput scan, double processing_latency_s) {
   // Time going backwards resets the session and drops the waiting scans; a match running on
   // the old timeline is completed now and discarded by the epoch check (the nodelet's worker
   // discards it when it finishes).
-  const auto a = session_.onScanArrival(scan.stamp_s);
+  const auto a = session_.onScanArrival(scan.stamp_s, arrival);
+  if (!a.refused.empty()) {  // answered at once, as the nodelet does
+    PipelineScanReport r;
+    r.arrival_s = r.start_s = r.finish_s = arrival;
+    r.match.stamp_s = scan.stamp_s;
+    r.match.input_points = scan.points.size();
+    r.match.outcome = MatchOutcome::kSkipped;
+    r.match.reason = a.refused;
+    reports_.push_back(std::move(r));
+    return;
+  }
   if (a.timeWentBackwards() && in_flight_) complete();
   session_.enqueue(WaitingScan{std::move(scan), arrival, processing_latency_s});
   if (!in_flight_) startNext(arrival);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "gmm_localization/core/common/option_checks.h"
 
@@ -14,6 +15,8 @@ std::string MatchSessionOptions::validate() const {
         bad("odometry_max_extrapolation_s", odometry_max_extrapolation_s, 0.0, 10.0),
         bad("deskew_twist_max_gap_s", deskew_twist_max_gap_s, 0.0, 10.0),
         bad("time_backwards_tolerance_s", time_backwards_tolerance_s, 0.0, 1e9),
+        bad("max_scan_ahead_s", max_scan_ahead_s, 0.0, 1e9),
+        bad("max_scan_age_s", max_scan_age_s, 0.0, 1e9),
         bad("scan_queue_size", scan_queue_size, 1, 100)}) {
     if (!e.empty()) return e;
   }
@@ -123,6 +126,32 @@ double MatchSessionState::checkScanStamp(double stamp_s) {
   have_last_scan_ = true;
   last_scan_stamp_s_ = stamp_s;
   return jump;
+}
+
+std::string MatchSessionState::stampVersusClock(double stamp_s, double clock_s) const {
+  if (!std::isfinite(stamp_s)) return "scan stamp not finite";
+  if (std::isnan(clock_s)) return {};
+  char reason[220];
+  // Ahead of the clock and of the newest INS sample: a loaded host delivers /clock late (sim
+  // time lags the data by seconds), the INS samples come with the scans.
+  const double newest_data_s = odometry_.empty() ? clock_s : odometry_.newest().stamp_s;
+  const double reference_s = std::max(clock_s, newest_data_s);
+  if (stamp_s > reference_s + options_.max_scan_ahead_s) {
+    std::snprintf(reason, sizeof(reason),
+                  "scan stamped %.3f s after the clock and the newest INS sample "
+                  "(max_scan_ahead_s %.1f): refused; check the driver's clock, or use_sim_time "
+                  "with rosbag play --clock",
+                  stamp_s - reference_s, options_.max_scan_ahead_s);
+    return reason;
+  }
+  if (stamp_s < clock_s - options_.max_scan_age_s) {
+    std::snprintf(reason, sizeof(reason),
+                  "scan stamped %.3f s before the clock (max_scan_age_s %.1f): too old, refused; "
+                  "check the driver's clock, or use_sim_time with rosbag play --clock",
+                  clock_s - stamp_s, options_.max_scan_age_s);
+    return reason;
+  }
+  return {};
 }
 
 void MatchSessionState::armConfiguredPose() {

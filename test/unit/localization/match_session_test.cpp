@@ -73,6 +73,45 @@ TEST(MatchSessionOptions, ValidateNamesTheKey) {
   EXPECT_NE(o.validate().find("time_backwards_tolerance_s"), std::string::npos);
 }
 
+TEST(MatchSession, AStampFarFromTheClockIsRefusedAndChangesNothing) {
+  MatchSessionOptions o;
+  o.max_scan_ahead_s = 2.0;
+  o.max_scan_age_s = 10.0;
+  Session s(o, LocalizationPolicyOptions());
+  ASSERT_TRUE(s.arrive(100.0, 0, 100.05).refused.empty());
+  // 1e5 s after the clock and 1e4 s before it: refused with the reason, not queued, no reset.
+  const Session::Arrival ahead = s.arrive(100.1 + 1e5, 1, 100.15);
+  EXPECT_NE(ahead.refused.find("after the clock"), std::string::npos) << ahead.refused;
+  EXPECT_NE(ahead.refused.find("max_scan_ahead_s"), std::string::npos) << ahead.refused;
+  const Session::Arrival behind = s.arrive(100.2 - 1e4, 2, 100.25);
+  EXPECT_NE(behind.refused.find("before the clock"), std::string::npos) << behind.refused;
+  EXPECT_NE(behind.refused.find("max_scan_age_s"), std::string::npos) << behind.refused;
+  EXPECT_FALSE(behind.timeWentBackwards());
+  EXPECT_EQ(s.waiting(), 1u);
+  // The next good scan is not taken for time going backwards (the far-future stamp was not
+  // remembered as the latest).
+  const Session::Arrival good = s.arrive(100.3, 3, 100.35);
+  EXPECT_TRUE(good.refused.empty());
+  EXPECT_FALSE(good.timeWentBackwards());
+  EXPECT_EQ(s.resets(), 0u);
+  EXPECT_EQ(s.epoch(), 0u);
+  // Within the limits (a late scan 9 s old, a clock 1.9 s behind the stamp): taken.
+  EXPECT_TRUE(s.arrive(100.4, 4, 109.4).refused.empty());
+  EXPECT_TRUE(s.arrive(111.3, 5, 109.4).refused.empty());
+  // A clock that lags the data (a loaded host delivers /clock late): the newest INS sample
+  // vouches for the stamp.
+  OdometrySample sample;
+  sample.stamp_s = 111.3;
+  ASSERT_EQ(s.addOdometry(sample), OdometryBuffer::AddResult::kAdded);
+  EXPECT_TRUE(s.arrive(113.0, 8, 105.0).refused.empty());
+  EXPECT_FALSE(s.arrive(113.4, 9, 105.0).refused.empty());  // 2.1 s after the INS sample
+  // No clock (NaN): no check; a non-finite stamp is refused in any case.
+  EXPECT_TRUE(s.arrive(111.4 + 1e5, 6).refused.empty());
+  EXPECT_FALSE(s.arrive(NAN, 7, 111.5).refused.empty());
+  o.max_scan_age_s = -1.0;
+  EXPECT_NE(o.validate().find("max_scan_age_s"), std::string::npos);
+}
+
 TEST(MatchSession, TimeGoingBackwardsResetsAndReArmsTheConfiguredPose) {
   MatchSessionOptions o;
   o.time_backwards_tolerance_s = 1.0;

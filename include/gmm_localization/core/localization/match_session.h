@@ -7,7 +7,11 @@
 //   epoch.
 // - Time: a scan stamped earlier than the previous scan by more than time_backwards_tolerance_s
 //   (a looping bag) resets the tracker, increments the epoch, drops every waiting scan (counted)
-//   and, when configured_pose_on_reset, arms the configured pose again.
+//   and, when configured_pose_on_reset, arms the configured pose again. Before that, a scan
+//   stamped more than max_scan_ahead_s after the clock or more than max_scan_age_s before it is
+//   refused with a reason and changes nothing: one bad stamp neither resets the session nor
+//   makes the next good scan look like time going backwards. "After the clock" means after
+//   both the clock and the newest INS sample: on a loaded host /clock arrives late.
 // - Queue: scans wait in arrival order in a DropOldestQueue of scan_queue_size entries; a scan
 //   arriving at a full queue drops the oldest. Drops are counted in total and since the last
 //   scan taken (the count the next status or report carries). The scan being matched is not in
@@ -28,6 +32,7 @@
 // (MatchProcessor::process) runs outside it, between beginMatch() and finishMatch().
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -50,6 +55,8 @@ struct MatchSessionOptions {
   bool deskew = true;                         ///< motion-compensate scans with the INS twist
   double deskew_twist_max_gap_s = 0.2;        ///< INS sample within this of mid-scan [s]
   double time_backwards_tolerance_s = 1.0;    ///< scan stamp regression that resets [s]
+  double max_scan_ahead_s = 2.0;              ///< stamp after clock and INS: refused beyond [s]
+  double max_scan_age_s = 10.0;               ///< stamp before the clock: refused beyond [s]
   bool configured_pose_on_reset = true;       ///< re-arm the configured pose after a reset
   /// Scans waiting while one is matched, in arrival order; when full the oldest is dropped
   /// (1: only the latest waits, the behaviour of a queue_size 1 subscriber).
@@ -121,6 +128,9 @@ class MatchSessionState {
   /// The time rule for a scan stamped stamp_s: returns how far time went backwards [s] (> 0:
   /// the session was reset and the caller drops the waiting scans), else 0.
   double checkScanStamp(double stamp_s);
+  /// Why a scan stamped stamp_s is refused at clock_s (max_scan_ahead_s, max_scan_age_s; a
+  /// non-finite stamp), "" when it is not or clock_s is NaN.
+  std::string stampVersusClock(double stamp_s, double clock_s) const;
 
  private:
   void armConfiguredPose();
@@ -148,6 +158,7 @@ class MatchSession : public MatchSessionState {
   struct Arrival {
     double backwards_jump_s = 0.0;  ///< > 0: time went backwards by this; the session was reset
     size_t dropped = 0;             ///< waiting scans of the old timeline dropped by the reset
+    std::string refused;            ///< non-empty: the stamp is refused (why); do not enqueue
     bool timeWentBackwards() const { return backwards_jump_s > 0.0; }
   };
   /// The oldest waiting scan (takeNext).
@@ -160,20 +171,23 @@ class MatchSession : public MatchSessionState {
       : MatchSessionState(options, policy),
         waiting_(static_cast<size_t>(std::max(1, options.scan_queue_size))) {}
 
-  /// Call when a scan stamped stamp_s arrives, before enqueue(): applies the time rule; after a
-  /// reset the waiting scans are dropped (counted).
-  Arrival onScanArrival(double stamp_s) {
+  /// Call when a scan stamped stamp_s arrives at clock_s (NaN: no clock check), before
+  /// enqueue(): a stamp too far from the clock is refused (Arrival::refused, nothing changes);
+  /// else the time rule; after a reset the waiting scans are dropped (counted).
+  Arrival onScanArrival(double stamp_s, double clock_s = NAN) {
     Arrival a;
+    a.refused = stampVersusClock(stamp_s, clock_s);
+    if (!a.refused.empty()) return a;
     a.backwards_jump_s = checkScanStamp(stamp_s);
     if (a.timeWentBackwards()) a.dropped = count(waiting_.clear());
     return a;
   }
   /// Queues a scan; returns how many of the oldest were dropped to make room.
   size_t enqueue(Item item) { return count(waiting_.push(std::move(item))); }
-  /// onScanArrival() then enqueue(); Arrival::dropped counts both.
-  Arrival arrive(double stamp_s, Item item) {
-    Arrival a = onScanArrival(stamp_s);
-    a.dropped += enqueue(std::move(item));
+  /// onScanArrival() then, unless refused, enqueue(); Arrival::dropped counts both.
+  Arrival arrive(double stamp_s, Item item, double clock_s = NAN) {
+    Arrival a = onScanArrival(stamp_s, clock_s);
+    if (a.refused.empty()) a.dropped += enqueue(std::move(item));
     return a;
   }
 
