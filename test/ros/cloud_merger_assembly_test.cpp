@@ -12,6 +12,7 @@
 #include "../unit/support/corridor_map.h"
 #include "gmm_localization/core/localization/match_processor.h"
 #include "gmm_localization/ros/matcher_outputs.h"
+#include "support/corridor_match_status.h"
 
 namespace gmm_localization {
 namespace node {
@@ -241,28 +242,11 @@ TEST(CloudMergerAssembly, EmptyCycle) {
   EXPECT_TRUE(m.time_s.empty());
 }
 
-/// The matcher's status for the merged cloud `msg` (Matcher::scanToBase, then the processor) on
-/// the corridor from a configured prior at the origin, driving at 10 m/s.
+/// The status of matching the merged cloud on the corridor, driving at 10 m/s.
 MatchStatus statusOf(const sensor_msgs::PointCloud2& msg) {
-  auto data = fromMsg(msg);
-  EXPECT_TRUE(data.ok()) << data.error();
-  ScanInput scan;
-  scan.stamp_s = msg.header.stamp.toSec();
-  scan.points = data->points;
-  scan.time_s = data->time_s;
-  scan.time_source = describePointTimes(*data);
-  scan.time_problem = data->time_problem;
-  auto processor = MatchProcessor::create(RegistrationOptions(), LocalizationPolicyOptions());
-  EXPECT_TRUE(processor.ok()) << processor.error();
-  static const ChunkMap map = testing::corridorChunks();
-  Prior prior;
-  prior.source = PriorSource::kConfigured;
   BodyTwist twist;
   twist.linear_mps.x() = 10.0;
-  const MatchReport report = processor->process(map, std::move(scan), prior, &twist, false);
-  MatchStatus s;
-  toStatusMsg(report, "map", 0.0, 0, s);
-  return s;
+  return testing::corridorMatchStatus(msg, &twist);
 }
 
 TEST(CloudMergerAssembly, TheMatcherDeskewsAGoodMergeAndSaysWhyNotWhenAnInputIsRefused) {

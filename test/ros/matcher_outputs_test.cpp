@@ -13,6 +13,7 @@
 
 #include "../unit/support/corridor_map.h"
 #include "gmm_localization/ros/cloud_conversion.h"
+#include "support/corridor_match_status.h"
 
 namespace gmm_localization {
 namespace node {
@@ -202,26 +203,8 @@ sensor_msgs::PointCloud2 hesaiCloud(F time) {
   return m;
 }
 
-/// The status of matching `cloud` (read by the matcher's reader) on the corridor from a
-/// configured prior at the origin, with `twist` (null: none).
 MatchStatus statusOf(const sensor_msgs::PointCloud2& cloud, const BodyTwist* twist) {
-  auto data = fromMsg(cloud);
-  EXPECT_TRUE(data.ok()) << data.error();
-  ScanInput scan;
-  scan.stamp_s = cloud.header.stamp.toSec();
-  scan.points = data->points;
-  scan.time_s = data->time_s;
-  scan.time_source = describePointTimes(*data);
-  scan.time_problem = data->time_problem;
-  auto processor = MatchProcessor::create(RegistrationOptions(), LocalizationPolicyOptions());
-  EXPECT_TRUE(processor.ok()) << processor.error();
-  static const ChunkMap map = testing::corridorChunks();
-  Prior prior;
-  prior.source = PriorSource::kConfigured;
-  const MatchReport report = processor->process(map, std::move(scan), prior, twist, false);
-  MatchStatus s;
-  toStatusMsg(report, "map", 0.0, 0, s);
-  return s;
+  return testing::corridorMatchStatus(cloud, twist);
 }
 
 TEST(MatcherOutputs, AbsoluteDriverTimesAreDeskewedAndGarbageIsNot) {
