@@ -31,6 +31,8 @@ void EkfNode::setupDiagnostics() {
     s.add("running", filter_->active());
     s.add("horizontal sigma (max) [m]", fixed(d.max_horizontal_sigma_m, 3));
     s.add("yaw sigma [deg]", fixed(d.yaw_sigma_rad * 180.0 / M_PI, 2));
+    s.add("INS twist scale error [%] (sigma)",
+          fixed(100.0 * d.twist_scale, 3) + " (" + fixed(100.0 * d.twist_scale_sigma, 3) + ")");
     for (int i = 0; i < kMeasurementSourceCount; ++i) {
       const SourceCounters& c = d.sources[i];
       s.add(std::string(sourceName(static_cast<MeasurementSource>(i))) +

@@ -37,7 +37,8 @@ struct EkfNodeOptions {
 
 /// Throws ConfigError naming the key, value and range.
 EkfNodeOptions loadEkfNodeOptions(const ParamSource& pnh);
-/// EkfOptions from keys named after its members (lists of 15 for the per-state arrays).
+/// EkfOptions from keys named after its members (lists of 16 for the per-state arrays; 15, the
+/// kinematic states only, leave the twist scale at its default).
 EkfOptions loadEkfOptions(const ParamSource& nh);
 /// FilterPolicyOptions (keys under `policy/`).
 FilterPolicyOptions loadFilterPolicyOptions(const ParamSource& nh);

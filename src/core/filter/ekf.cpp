@@ -324,6 +324,8 @@ EkfDiagnostics Ekf::diagnostics() const {
   d.max_position_sigma_m = largestSigma(position);
   d.max_horizontal_sigma_m = largestSigma(Eigen::Matrix2d(position.topLeftCorner<2, 2>()));
   d.yaw_sigma_rad = std::sqrt(s.P(kStateYaw, kStateYaw));
+  d.twist_scale = s.twistScale();
+  d.twist_scale_sigma = std::sqrt(s.P(kStateTwistScale, kStateTwistScale));
   return d;
 }
 

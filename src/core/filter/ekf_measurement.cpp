@@ -208,8 +208,9 @@ Result<EkfMeasurement> makeTwistMeasurement(const TwistMeasurement& m, const Ekf
   MeasurementVector z;
   MeasurementCovariance cov;
   select6(mask, kStateVx, values, m.covariance, &indices, &z, &cov);
-  return assemble(MeasurementSource::kTwist, MeasurementModel::kDirect, m.stamp_s, indices, z, cov,
-                  options);
+  const MeasurementModel model =
+      options.estimate_twist_scale ? MeasurementModel::kScaledTwist : MeasurementModel::kDirect;
+  return assemble(MeasurementSource::kTwist, model, m.stamp_s, indices, z, cov, options);
 }
 
 Result<EkfMeasurement> makeImuOrientationMeasurement(const ImuMeasurement& m,
@@ -280,6 +281,18 @@ void evaluateMeasurement(const EkfMeasurement& m, const StateVector& x, double g
   for (int i = 0; i < m.size; ++i) {
     (*h)(i) = x(m.indices[i]);
     (*jacobian)(i, m.indices[i]) = 1.0;
+  }
+  if (m.model == MeasurementModel::kScaledTwist) {
+    // The INS reads (1 + s) times the true velocity: h = (1 + s) v_k, dh/dv_k = 1 + s,
+    // dh/ds = v_k. Its rates are gyro rates, unscaled.
+    const double gain = 1.0 + x(kStateTwistScale);
+    for (int i = 0; i < m.size; ++i) {
+      const int k = m.indices[i];
+      if (k < kStateVx || k > kStateVz) continue;
+      (*h)(i) = gain * x(k);
+      (*jacobian)(i, k) = gain;
+      (*jacobian)(i, kStateTwistScale) = x(k);
+    }
   }
   if (m.model == MeasurementModel::kAccelerationMinusGravity) {
     // Specific force f = a + R(roll, pitch)^T (0, 0, g): gravity seen from the body, with its

@@ -19,7 +19,7 @@ UpdateResult applyMeasurement(const EkfMeasurement& m, double gate_threshold_sq,
     }
   }
 
-  // P H^T is all the update needs from P: (15 x m).
+  // P H^T is all the update needs from P: (kStateSize x m).
   const Eigen::Matrix<double, kStateSize, Eigen::Dynamic, 0, kStateSize, kMaxMeasurementSize> pht =
       state->P * H.transpose();
   MeasurementCovariance s = H * pht + m.R;

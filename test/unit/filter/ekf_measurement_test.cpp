@@ -120,6 +120,54 @@ TEST(EkfMeasurement, TwistMaskAndOptionsSelectComponents) {
   EXPECT_FALSE(makeTwistMeasurement(t, o).ok());  // nothing left to fuse
 }
 
+TEST(EkfMeasurement, ScaledTwistModelAndJacobian) {
+  // The INS reads (1 + s) v: h = (1 + s) v on the linear rows, the rates unscaled; the Jacobian
+  // matches finite differences in every state.
+  EkfOptions o;
+  TwistMeasurement t;
+  t.stamp_s = 2.0;
+  t.linear_mps << 12.0, 0.3, -0.1;
+  t.angular_radps << 0.01, -0.02, 0.3;
+  t.covariance = Matrix6d::Identity() * 1e-4;
+  auto m = makeTwistMeasurement(t, o);
+  ASSERT_TRUE(m.ok()) << m.error();
+  EXPECT_EQ(m->model, MeasurementModel::kScaledTwist);
+  ASSERT_EQ(m->size, 6);
+  StateVector x = StateVector::Zero();
+  x.segment<3>(kStateVx) << 11.9, 0.25, -0.05;
+  x.segment<3>(kStateWx) << 0.02, -0.01, 0.28;
+  x(kStateTwistScale) = 0.004;
+  MeasurementVector h;
+  MeasurementJacobian jac;
+  evaluateMeasurement(*m, x, o.gravity_mps2, &h, &jac);
+  EXPECT_NEAR(h(0), 1.004 * 11.9, 1e-12);
+  EXPECT_NEAR(h(2), 1.004 * -0.05, 1e-12);
+  EXPECT_NEAR(h(5), 0.28, 1e-12);
+  EXPECT_NEAR(jac(0, kStateTwistScale), 11.9, 1e-12);
+  EXPECT_NEAR(jac(0, kStateVx), 1.004, 1e-12);
+  EXPECT_EQ(jac(5, kStateTwistScale), 0.0);
+  for (int j = 0; j < kStateSize; ++j) {
+    StateVector xp = x, xm = x;
+    xp(j) += 1e-6;
+    xm(j) -= 1e-6;
+    MeasurementVector hp, hm;
+    MeasurementJacobian unused;
+    evaluateMeasurement(*m, xp, o.gravity_mps2, &hp, &unused);
+    evaluateMeasurement(*m, xm, o.gravity_mps2, &hm, &unused);
+    for (int i = 0; i < 6; ++i) {
+      EXPECT_NEAR(jac(i, j), (hp(i) - hm(i)) / 2e-6, 1e-6) << "d h" << i << " / d " << stateName(j);
+    }
+  }
+  // Off: the direct model, the scale never enters.
+  o.estimate_twist_scale = false;
+  m = makeTwistMeasurement(t, o);
+  ASSERT_TRUE(m.ok()) << m.error();
+  EXPECT_EQ(m->model, MeasurementModel::kDirect);
+  evaluateMeasurement(*m, x, o.gravity_mps2, &h, &jac);
+  EXPECT_DOUBLE_EQ(h(0), 11.9);
+  EXPECT_EQ(jac.col(kStateTwistScale).cwiseAbs().maxCoeff(), 0.0);
+}
+
 TEST(EkfMeasurement, ImuOrientationIgnoresYaw) {
   EkfOptions o;
   ImuMeasurement imu;

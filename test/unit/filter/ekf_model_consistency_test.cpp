@@ -1,9 +1,9 @@
 // The EKF machinery against truth drawn from its own model: x_k+1 = f(x_k, dt) + w_k with
 // w_k ~ N(0, diag(q) dt), and every measurement drawn from its stated covariance. Here the EKF is
-// the right filter, so the full-state NEES must average the state dimension (15). This checks
-// the Jacobians, the Joseph update, angle wrapping, gravity removal and delayed insertion
-// together, independently of how well the default tuning fits a real car
-// (ekf_simulation_test covers that).
+// the right filter, so the full-state NEES must average the state dimension (16). This checks
+// the Jacobians, the Joseph update, angle wrapping, gravity removal, the scaled INS twist
+// (z = (1 + s) v with the truth's own scale error s) and delayed insertion together, independently
+// of how well the default tuning fits a real car (ekf_simulation_test covers that).
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -25,7 +25,7 @@ double mean(const std::vector<double>& v) {
 }
 
 // Runs one 20 s drive (IMU and twist at 100 Hz, 6-DOF poses at 5 Hz delivered 100 ms late)
-// and appends the 15-state NEES every 0.1 s after 2 s.
+// and appends the full-state NEES every 0.1 s after 2 s.
 void runOnce(const EkfOptions& o, unsigned seed, std::vector<double>* nees) {
   const double dt = 0.01, duration = 20.0;
   const double tilt_sigma = 0.005, gyro_sigma = 0.002, accel_sigma = 0.05, v_sigma = 0.05,
@@ -71,7 +71,7 @@ void runOnce(const EkfOptions& o, unsigned seed, std::vector<double>* nees) {
     f.processImu(imu);
     TwistMeasurement tw;
     tw.stamp_s = t;
-    tw.linear_mps = x.segment<3>(kStateVx) + v_sigma * noise(3);
+    tw.linear_mps = (1.0 + x(kStateTwistScale)) * x.segment<3>(kStateVx) + v_sigma * noise(3);
     tw.angular_radps = x.segment<3>(kStateWx) + w_sigma * noise(3);
     tw.covariance.diagonal() << Eigen::Vector3d::Constant(v_sigma * v_sigma),
         Eigen::Vector3d::Constant(w_sigma * w_sigma);
@@ -105,20 +105,20 @@ void runOnce(const EkfOptions& o, unsigned seed, std::vector<double>* nees) {
 TEST(EkfModelConsistency, FullStateNeesMatchesItsDimension) {
   EkfOptions o;
   o.process_noise_density = {1e-4, 1e-4, 1e-4, 1e-6, 1e-6, 1e-6, 1e-3, 1e-3,
-                             1e-3, 1e-4, 1e-4, 1e-3, 0.1,  0.1,  0.1};
+                             1e-3, 1e-4, 1e-4, 1e-3, 0.1,  0.1,  0.1,  1e-6};
   o.initial_variance = {1.0, 1.0,  1.0,  1e-4, 1e-4, 1e-3, 1.0, 1.0,
-                        1.0, 1e-3, 1e-3, 1e-3, 0.1,  0.1,  0.1};
+                        1.0, 1e-3, 1e-3, 1e-3, 0.1,  0.1,  0.1, 1e-4};
   o.initial_variance[kStateVx] = 100.0;  // truth speeds drawn with sigma 10 m/s
   o.imu_gravity_removal = GravityRemoval::kStateEstimate;
   std::vector<double> nees;
   for (unsigned seed = 1; seed <= 5; ++seed) runOnce(o, seed, &nees);
   const double anees = mean(nees);
   std::printf(
-      "truth from the model, gravity from the state: ANEES(15 states) = %.2f over %zu "
+      "truth from the model, gravity from the state: ANEES(%d states) = %.2f over %zu "
       "samples\n",
-      anees, nees.size());
-  EXPECT_GT(anees, 15.0 * 0.8);
-  EXPECT_LT(anees, 15.0 * 1.2);
+      kStateSize, anees, nees.size());
+  EXPECT_GT(anees, kStateSize * 0.8);
+  EXPECT_LT(anees, kStateSize * 1.2);
 
   // Gravity removed with the message's orientation (its tilt covariance propagated).
   o.imu_gravity_removal = GravityRemoval::kMeasuredOrientation;
@@ -127,8 +127,8 @@ TEST(EkfModelConsistency, FullStateNeesMatchesItsDimension) {
   const double anees_measured = mean(nees);
   std::printf("truth from the model, gravity from the IMU orientation: ANEES = %.2f\n",
               anees_measured);
-  EXPECT_GT(anees_measured, 15.0 * 0.8);
-  EXPECT_LT(anees_measured, 15.0 * 1.2);
+  EXPECT_GT(anees_measured, kStateSize * 0.8);
+  EXPECT_LT(anees_measured, kStateSize * 1.2);
 }
 
 }  // namespace

@@ -47,17 +47,17 @@ class Ekf {
   const EkfOptions& options() const { return options_; }
 
   /// (Re)starts the filter at time_s with pose map_T_base and its 6x6 covariance (x, y, z,
-  /// roll, pitch, yaw); velocities, rates and accelerations start at zero with
+  /// roll, pitch, yaw); velocities, rates, accelerations and the twist scale start at zero with
   /// EkfOptions::initial_variance. Clears the history; any time_s is accepted (also earlier
   /// than the filter time: this is how a looping bag recovers). Fails, changing nothing, on a
   /// non-finite or non-rotation pose or a covariance that is not symmetric positive definite.
   Status reset(const Eigen::Isometry3d& map_T_base, const Matrix6d& pose_covariance, double time_s);
 
   /// Replaces the pose (from /initialpose or a relocalization) and its covariance, keeping the
-  /// velocity, rate and acceleration estimates; cross-covariances of the pose are zeroed. Applies
-  /// at max(time_s, time()) after predicting there; clears the history (older measurements are
-  /// then too old). Behaves as reset() when not initialized, or when time_s is beyond
-  /// max_prediction_gap_s ahead. Same failures as reset().
+  /// velocity, rate, acceleration and twist-scale estimates; cross-covariances of the pose are
+  /// zeroed. Applies at max(time_s, time()) after predicting there; clears the history (older
+  /// measurements are then too old). Behaves as reset() when not initialized, or when time_s is
+  /// beyond max_prediction_gap_s ahead. Same failures as reset().
   Status setPose(const Eigen::Isometry3d& map_T_base, const Matrix6d& pose_covariance,
                  double time_s);
 
@@ -69,7 +69,8 @@ class Ekf {
   /// (stale, backwards, too far ahead) gives one report for the whole message (its first part's
   /// source), so callers counting time jumps count messages.
   std::vector<FuseReport> processImu(const ImuMeasurement& imu);
-  /// Fuses an odometry body twist.
+  /// Fuses an odometry body twist (its linear part as (1 + s) v with the estimated scale error
+  /// s when EkfOptions::estimate_twist_scale, see ekf_state.h).
   FuseReport processTwist(const TwistMeasurement& twist);
   /// Fuses an absolute pose in map (scan match), gated with pose_gate_probability.
   FuseReport processPose(const PoseMeasurement& pose);

@@ -74,6 +74,9 @@ struct EkfDiagnostics {
   /// sqrt of the largest eigenvalue of the x, y covariance [m].
   double max_horizontal_sigma_m = NAN;
   double yaw_sigma_rad = NAN;
+  /// Estimated scale error of the INS linear twist and its sigma [-] (ekf_state.h).
+  double twist_scale = NAN;
+  double twist_scale_sigma = NAN;
 
   const SourceCounters& source(MeasurementSource s) const { return sources[static_cast<int>(s)]; }
 };

@@ -109,6 +109,7 @@ using MeasurementJacobian = Eigen::Matrix<double, Eigen::Dynamic, kStateSize, Ei
 enum class MeasurementModel {
   kDirect,                    ///< z = x[indices]
   kAccelerationMinusGravity,  ///< z = specific force f; h(x) = a + R(roll, pitch)^T g_up
+  kScaledTwist,               ///< INS twist: h(x) = (1 + s) v for vx, vy, vz rows, w for the rest
 };
 
 /// A validated measurement of `size` state components (at most 6).
@@ -123,7 +124,8 @@ struct EkfMeasurement {
 };
 
 /// Validated internal measurements, or the reason the input is rejected. Each applies
-/// min_measurement_variance as a diagonal floor. An IMU or twist whose used parts are all
+/// min_measurement_variance as a diagonal floor. A twist is kScaledTwist when
+/// EkfOptions::estimate_twist_scale is set, else kDirect. An IMU or twist whose used parts are all
 /// disabled fails with a reason saying so.
 Result<EkfMeasurement> makePoseMeasurement(const PoseMeasurement& m, const EkfOptions& options);
 Result<EkfMeasurement> makeTwistMeasurement(const TwistMeasurement& m, const EkfOptions& options);
@@ -138,7 +140,8 @@ Result<EkfMeasurement> makeImuAccelerationMeasurement(const ImuMeasurement& m,
 
 /// Predicted measurement h(x) and Jacobian H (size x kStateSize) at state x. For
 /// kAccelerationMinusGravity, H has identity on a and the partials of R^T g_up in roll and
-/// pitch (see GravityRemoval::kStateEstimate).
+/// pitch (see GravityRemoval::kStateEstimate). For kScaledTwist a linear row k has (1 + s) on
+/// v_k and v_k on s (EkfOptions::estimate_twist_scale).
 void evaluateMeasurement(const EkfMeasurement& m, const StateVector& x, double gravity_mps2,
                          MeasurementVector* h, MeasurementJacobian* jacobian);
 

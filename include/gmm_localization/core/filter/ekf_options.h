@@ -66,22 +66,27 @@ struct EkfOptions {
   /// accelerations are random walks whose density sets how fast the filter follows changes.
   /// The defaults are tuned on ekf_simulation_test's car (changing speed and yaw rate, rolling
   /// ground): they keep it slightly conservative (NEES below its dimension), not overconfident.
+  /// The twist scale's density sets how fast a change of the INS scale is followed: 1e-9/s
+  /// lets it wander by 0.1 % in 1000 s.
   std::array<double, kStateSize> process_noise_density = {
       1e-4, 1e-4, 1e-4,  // x, y, z            [m^2/s]
       1e-6, 1e-6, 1e-6,  // roll, pitch, yaw   [rad^2/s]
       1e-3, 1e-3, 1e-3,  // vx, vy, vz         [(m/s)^2/s]
       1e-2, 1e-2, 1e-2,  // wx, wy, wz         [(rad/s)^2/s]
-      1.0,  1.0,  1.0};  // ax, ay, az         [(m/s^2)^2/s]
+      1.0,  1.0,  1.0,   // ax, ay, az         [(m/s^2)^2/s]
+      1e-9};             // twist scale        [1/s]
 
   /// Initial variance per state after reset() for the states the caller does not give (the
-  /// pose block comes with reset(), so only entries 6..14 are used), each finite and > 0
+  /// pose block comes with reset(), so only entries 6..15 are used), each finite and > 0
   /// [unit^2]. Wide on purpose: reset() sets velocity, rates and acceleration to zero, and a
   /// vehicle already moving at 20 m/s must not have its first twist gated out.
+  /// The twist scale starts at 0 with this variance (1e-4: a 1 % scale error is one sigma).
   std::array<double, kStateSize> initial_variance = {1.0,   1.0,   1.0,    // x, y, z
                                                      0.01,  0.01,  0.1,    // roll, pitch, yaw
                                                      400.0, 400.0, 400.0,  // vx, vy, vz
                                                      1.0,   1.0,   1.0,    // wx, wy, wz
-                                                     25.0,  25.0,  25.0};  // ax, ay, az
+                                                     25.0,  25.0,  25.0,   // ax, ay, az
+                                                     1e-4};                // twist scale
 
   /// Mahalanobis gates, as the probability mass of the chi-square distribution (with the
   /// measurement's dimension as degrees of freedom) that is accepted, range (0, 1]; 1 disables
@@ -99,6 +104,9 @@ struct EkfOptions {
   /// Which parts of an odometry twist are fused.
   bool twist_use_linear = true;   ///< vx, vy, vz
   bool twist_use_angular = true;  ///< wx, wy, wz
+  /// Estimate the scale error s of the INS linear twist (the twist model is then
+  /// z = (1 + s) v, ekf_state.h). false: z = v, s stays 0 and is never coupled to the rest.
+  bool estimate_twist_scale = true;
 
   /// Success, or a reason naming the first offending key, its value and the allowed range.
   Status validate() const;

@@ -1,22 +1,32 @@
 #pragma once
 // EKF state layout, frames and the small geometric helpers every EKF file shares.
 //
-// The state (15 components, robot_localization's layout) describes base_link in the map frame
-// (REP-105, x east, y north, z up; REP-103 SI units):
+// The state (robot_localization's 15 components plus one calibration state) describes
+// base_link in the map frame (REP-105, x east, y north, z up; REP-103 SI units):
 //   position        x, y, z            map frame                                 [m]
 //   orientation     roll, pitch, yaw   map_R_base = Rz(yaw) Ry(pitch) Rx(roll)   [rad]
 //   linear velocity vx, vy, vz         base_link frame                           [m/s]
 //   angular rate    wx, wy, wz         base_link frame                           [rad/s]
 //   acceleration    ax, ay, az         base_link frame, gravity excluded         [m/s^2]
+//   twist scale     s                  the INS linear twist reads (1 + s) v      [-]
 // Angles are kept wrapped to [-pi, pi). The Euler parameterisation is singular at |pitch| =
 // pi/2, which a ground vehicle never reaches; the models clamp cos(pitch) away from zero so no
 // division by zero can occur, but near the singularity results are meaningless.
 //
-// Why 15 states and not fewer: the matcher observes x, y, yaw (and optionally z, roll, pitch);
-// the Applanix gives body twist; the IMU gives rates, specific force and roll/pitch. Keeping the
-// body acceleration as a state lets the accelerometer contribute (between scan matches and when
-// the odometry twist drops out) at the price of six states that are cheap at this size. No IMU
-// biases are estimated: the Applanix IMU output is bias-compensated by the INS.
+// Why 15 kinematic states and not fewer: the matcher observes x, y, yaw (and optionally z, roll,
+// pitch); the Applanix gives body twist; the IMU gives rates, specific force and roll/pitch.
+// Keeping the body acceleration as a state lets the accelerometer contribute (between scan matches
+// and when the odometry twist drops out) at the price of six states that are cheap at this size. No
+// IMU biases are estimated: the Applanix IMU output is bias-compensated by the INS.
+//
+// Why the twist scale: an INS measures distance with a scale error of a few tenths of a percent
+// (wheel or DMI calibration, tyre pressure). Its twist is far more precise than that (mm/s), so a
+// filter that takes it as unbiased follows it and runs ahead of (or behind) the scan matches in
+// proportion to the speed: 0.2 % at 12 m/s is 2.4 cm/s, which between matches that weigh little
+// against the twist built a steady 2-4 cm lead on the simulated drives (docs/evaluation.md). With
+// s in the state the matches calibrate the twist (s is observable whenever the vehicle moves) and
+// v is the true body velocity. s is a slow random walk; it is kept by setPose() (a relocalization
+// does not change the INS) and starts at 0 on reset().
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -42,7 +52,8 @@ enum StateIndex : int {
   kStateAx,
   kStateAy,
   kStateAz,
-  kStateSize  ///< number of states (15)
+  kStateTwistScale,  ///< s: INS linear twist = (1 + s) x true body velocity
+  kStateSize         ///< number of states (16)
 };
 
 /// First index of each 3-vector block.
@@ -90,6 +101,8 @@ struct EkfState {
   Eigen::Vector3d angularVelocity() const { return x.segment<3>(kAngularVelocityBlock); }
   /// Body-frame acceleration of base_link without gravity [m/s^2].
   Eigen::Vector3d linearAcceleration() const { return x.segment<3>(kLinearAccelerationBlock); }
+  /// Scale error s of the INS linear twist (which reads (1 + s) times the true velocity) [-].
+  double twistScale() const { return x(kStateTwistScale); }
   /// Covariance of (vx, vy, vz, wx, wy, wz), the order of geometry_msgs TwistWithCovariance.
   Matrix6d twistCovariance() const { return P.block<6, 6>(kStateVx, kStateVx); }
 };

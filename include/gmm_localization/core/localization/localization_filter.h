@@ -62,6 +62,8 @@ struct FilterPolicyOptions {
   /// v_k)^2), v_k the twist's own speed along k. An INS reports millimetres per second but carries
   /// a scale error of a few tenths of a percent; trusted as reported, the filter integrates that
   /// bias between matches and runs ahead of them at speed. 0, 0: the reported covariance as is.
+  /// The scale error itself is estimated by the EKF (EkfOptions::estimate_twist_scale); the
+  /// floor covers the time before that estimate has converged.
   double twist_linear_min_sigma_mps = 0.0;
   double twist_linear_sigma_per_speed = 0.0;
 
