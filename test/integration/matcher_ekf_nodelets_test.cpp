@@ -4,6 +4,8 @@
 // scans from a known, fixed pose. The tests run in order on one running system.
 #include "matcher_ekf_nodelets_harness.h"
 
+#include "bad_clouds.h"
+
 #include <algorithm>
 #include <functional>
 #include <set>
@@ -174,33 +176,8 @@ TEST(MatcherEkfNodelets, AcceptedPoseWithinToleranceAndTheEkfFollows) {
 TEST(MatcherEkfNodelets, MalformedEmptyAndNanCloudsGiveStatusReasons) {
   harness->setStreaming(false);
   ros::WallDuration(0.5).sleep();  // let the worker finish what it holds
-  struct Case {
-    const char* what;
-    std::function<void(sensor_msgs::PointCloud2&)> spoil;
-    const char* reason;
-  };
-  const std::vector<Case> cases = {
-      {"no z field", [](sensor_msgs::PointCloud2& m) { m.fields[2].name = "w"; },
-       "malformed cloud"},
-      {"truncated data", [](sensor_msgs::PointCloud2& m) { m.data.resize(m.data.size() / 2); },
-       "malformed cloud"},
-      {"empty",
-       [](sensor_msgs::PointCloud2& m) {
-         m.width = 0;
-         m.row_step = 0;
-         m.data.clear();
-       },
-       "empty cloud"},
-      {"all NaN",
-       [](sensor_msgs::PointCloud2& m) {
-         const float nan = std::nanf("");
-         for (size_t i = 0; i + 12 <= m.data.size(); i += m.point_step) {
-           for (int k = 0; k < 3; ++k) std::memcpy(&m.data[i + 4 * k], &nan, 4);
-         }
-       },
-       "no finite points"},
-  };
-  for (const Case& c : cases) {
+  const std::vector<CloudCase> cases = unmatchableClouds();
+  for (const CloudCase& c : cases) {
     sensor_msgs::PointCloud2 msg = harness->scanAt(harness->simNow());
     c.spoil(msg);
     harness->publishScan(msg);

@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "bad_clouds.h"
 #include "gmm_localization/LoadMap.h"
 #include "gmm_localization/MapIndex.h"
 #include "vehicle_test_player.h"
@@ -161,19 +162,6 @@ long waitForCount(const char* name, const char* key, long at_least) {
   return v;
 }
 
-/// Writes float `v` into the x, y, z of every `every`-th point (offsets of the template).
-void setPoints(sensor_msgs::PointCloud2& m, float v, size_t every) {
-  for (size_t i = 0; i * m.point_step + 12 <= m.data.size(); i += every) {
-    for (int k = 0; k < 3; ++k) std::memcpy(&m.data[i * m.point_step + 4 * k], &v, 4);
-  }
-}
-
-struct CloudCase {
-  const char* what;
-  std::function<void(sensor_msgs::PointCloud2&)> spoil;
-  const char* reason;  ///< expected in the status's reason; nullptr: may be accepted
-};
-
 TEST(VehicleBadInput, StartsOnACopyOfTheMap) {
   std::string map;
   ASSERT_TRUE(ros::param::get("~map", map));
@@ -213,20 +201,8 @@ TEST(VehicleBadInput, StartsOnACopyOfTheMap) {
 
 TEST(VehicleBadInput, BadCloudsAreAnsweredWithTheirCause) {
   const float inf = std::numeric_limits<float>::infinity();
-  const std::vector<CloudCase> cases = {
-      {"no z field", [](sensor_msgs::PointCloud2& m) { m.fields[2].name = "w"; },
-       "malformed cloud"},
-      {"truncated data", [](sensor_msgs::PointCloud2& m) { m.data.resize(m.data.size() / 2); },
-       "malformed cloud"},
-      {"empty",
-       [](sensor_msgs::PointCloud2& m) {
-         m.width = 0;
-         m.row_step = 0;
-         m.data.clear();
-       },
-       "empty cloud"},
-      {"all NaN", [](sensor_msgs::PointCloud2& m) { setPoints(m, std::nanf(""), 1); },
-       "no finite points"},
+  std::vector<CloudCase> cases = unmatchableClouds();
+  const std::vector<CloudCase> matchable = {
       {"every 7th point Inf", [inf](sensor_msgs::PointCloud2& m) { setPoints(m, inf, 7); },
        nullptr},
       {"every 50th point at 1e30 m", [](sensor_msgs::PointCloud2& m) { setPoints(m, 1e30f, 50); },
@@ -247,6 +223,7 @@ TEST(VehicleBadInput, BadCloudsAreAnsweredWithTheirCause) {
       {"unknown frame", [](sensor_msgs::PointCloud2& m) { m.header.frame_id = "nowhere_frame"; },
        "no transform from the cloud frame"},
   };
+  cases.insert(cases.end(), matchable.begin(), matchable.end());
   for (const CloudCase& c : cases) {
     sensor_msgs::PointCloud2 msg = freshScan();
     c.spoil(msg);

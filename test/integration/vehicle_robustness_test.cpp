@@ -71,10 +71,6 @@ Pose6 offsetTruth(double rel_s, double dx, double dy, double dyaw_deg) {
   return p;
 }
 
-bool mapReadySince(double since, double timeout_s) {
-  return outputs->mapReadySince(since, timeout_s);
-}
-
 template <typename Pred>
 size_t countStatuses(double from_rel, double to_rel, Pred pred) {
   return outputs->locked([&] {
@@ -133,7 +129,7 @@ TEST(VehicleRobustness, StartsFromTheInitialPoseTopic) {
   const double since = wallNow();
   publishInitialPose(offsetTruth(0.0, 2.0, -1.5, 2.0), 0.0);
   // The map server serves the map around the pose hint before any TF exists.
-  ASSERT_TRUE(mapReadySince(since, 60.0)) << "no map around /initialpose";
+  ASSERT_TRUE(outputs->mapReadySince(since, 60.0)) << "no map around /initialpose";
   player->play();
   reach(kImuFrom);
   EXPECT_GE(countStatuses(0.0, kImuFrom, [](const MatchStatus& s) { return s.accepted; }), 5u)
@@ -237,7 +233,7 @@ TEST(VehicleRobustness, RecoversAndEndsLocalized) {
   player->hold(true);
   const double since = wallNow();
   publishInitialPose(offsetTruth(player->elapsed(), 1.0, -0.8, 2.0), player->elapsed());
-  EXPECT_TRUE(mapReadySince(since + 1.0, 60.0)) << "no map around the new initial pose";
+  EXPECT_TRUE(outputs->mapReadySince(since + 1.0, 60.0)) << "no map around the new initial pose";
   player->hold(false);
   ASSERT_TRUE(waitFor([] { return player->finished(); }, 120.0));
   ros::WallDuration(2.0).sleep();

@@ -21,6 +21,7 @@
 
 #include "../../unit/support/temp_dir.h"
 #include "gmm_localization/core/map/map_store.h"
+#include "ouster_cloud.h"
 
 #ifndef GMM_BUILD_MAP_BINARY
 #error "GMM_BUILD_MAP_BINARY (the path of the build_map executable) must be defined"
@@ -62,41 +63,19 @@ Eigen::Isometry3d mountTSensor() {
          Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ());
 }
 
-/// An Ouster cloud (ouster_ros's layout, 48-byte points, uint32 `t` at offset 20) of map
-/// points seen over the 0.1 s after `stamp`: each point is written in the sensor frame at its
-/// own time, 1 ms resolution, so only deskewing puts it back where it is.
+/// An Ouster cloud (ouster_ros's layout, uint32 `t` at offset 20) of map points seen over the
+/// 0.1 s after `stamp`: each point is written in the sensor frame at its own time, 1 ms
+/// resolution, so only deskewing puts it back where it is.
 sensor_msgs::PointCloud2 ousterScan(double stamp, const std::vector<Eigen::Vector3d>& world) {
-  sensor_msgs::PointCloud2 c;
-  c.header.stamp.fromSec(stamp);
-  c.header.frame_id = "os_sensor";
-  const std::pair<const char*, uint8_t> fields[] = {
-      {"x", sensor_msgs::PointField::FLOAT32}, {"y", sensor_msgs::PointField::FLOAT32},
-      {"z", sensor_msgs::PointField::FLOAT32}, {"intensity", sensor_msgs::PointField::FLOAT32},
-      {"t", sensor_msgs::PointField::UINT32},  {"ring", sensor_msgs::PointField::UINT16}};
-  const uint32_t offsets[] = {0, 4, 8, 16, 20, 26};
-  for (int k = 0; k < 6; ++k) {
-    sensor_msgs::PointField f;
-    f.name = fields[k].first;
-    f.datatype = fields[k].second;
-    f.offset = offsets[k];
-    f.count = 1;
-    c.fields.push_back(f);
-  }
-  c.height = 1;
-  c.width = static_cast<uint32_t>(world.size());
-  c.point_step = 48;
-  c.row_step = c.point_step * c.width;
-  c.data.assign(c.row_step, 0);
+  std::vector<Eigen::Vector3f> points;
+  std::vector<uint32_t> t_ns;
   for (size_t i = 0; i < world.size(); ++i) {
-    const uint32_t t_ns = static_cast<uint32_t>((i % 100) * 1000000);  // 0 .. 99 ms
-    const double t = stamp + t_ns * 1e-9;
+    t_ns.push_back(static_cast<uint32_t>((i % 100) * 1000000));  // 0 .. 99 ms
+    const double t = stamp + t_ns.back() * 1e-9;
     const Eigen::Isometry3d mapTSensor = mapTOdom() * odomTBase(t) * baseTMount() * mountTSensor();
-    const Eigen::Vector3f p = (mapTSensor.inverse() * world[i]).cast<float>();
-    uint8_t* out = c.data.data() + i * c.point_step;
-    std::memcpy(out, p.data(), 12);
-    std::memcpy(out + 20, &t_ns, 4);
+    points.push_back((mapTSensor.inverse() * world[i]).cast<float>());
   }
-  return c;
+  return testing::ousterCloud(stamp, "os_sensor", points, t_ns);
 }
 
 /// Map y of the wall: a cell centre (0.2 m cells), so that no point lies on a cell border.

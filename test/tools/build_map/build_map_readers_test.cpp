@@ -17,11 +17,13 @@
 #include "build_map/build_map_readers.h"
 #include "build_map/build_map_synthetic.h"
 #include "gmm_localization/core/map/map_format.h"
+#include "ouster_cloud.h"
 
 namespace gmm_localization {
 namespace tools {
 namespace {
 
+using testing::ousterCloud;
 using testing::TempDir;
 
 sensor_msgs::PointCloud2 cloudMsg(double t, const std::string& frame, float x) {
@@ -183,42 +185,6 @@ TEST(RosbagSource, DeskewsWithPerPointTime) {
     EXPECT_NEAR(b.points_m[1].x(), deskew ? 1.3 : 1.2, 1e-5);
     EXPECT_NEAR(b.sensor_origin_m.x(), 0.2, 1e-9);
   }
-}
-
-/// An Ouster-like cloud (ouster_ros's layout: x y z, intensity at 16, uint32 `t` [ns after the
-/// stamp] at 20, uint16 reflectivity and ring, uint32 range; 48-byte points) of the given
-/// points and times.
-sensor_msgs::PointCloud2 ousterCloud(double stamp, const std::string& frame,
-                                     const std::vector<Eigen::Vector3f>& points,
-                                     const std::vector<uint32_t>& t_ns) {
-  sensor_msgs::PointCloud2 c;
-  c.header.stamp.fromSec(stamp);
-  c.header.frame_id = frame;
-  const std::pair<const char*, uint8_t> fields[] = {
-      {"x", sensor_msgs::PointField::FLOAT32},   {"y", sensor_msgs::PointField::FLOAT32},
-      {"z", sensor_msgs::PointField::FLOAT32},   {"intensity", sensor_msgs::PointField::FLOAT32},
-      {"t", sensor_msgs::PointField::UINT32},    {"reflectivity", sensor_msgs::PointField::UINT16},
-      {"ring", sensor_msgs::PointField::UINT16}, {"range", sensor_msgs::PointField::UINT32}};
-  const uint32_t offsets[] = {0, 4, 8, 16, 20, 24, 26, 32};
-  for (int k = 0; k < 8; ++k) {
-    sensor_msgs::PointField f;
-    f.name = fields[k].first;
-    f.datatype = fields[k].second;
-    f.offset = offsets[k];
-    f.count = 1;
-    c.fields.push_back(f);
-  }
-  c.height = 1;
-  c.width = static_cast<uint32_t>(points.size());
-  c.point_step = 48;
-  c.row_step = c.point_step * c.width;
-  c.data.assign(c.row_step, 0);
-  for (size_t i = 0; i < points.size(); ++i) {
-    uint8_t* p = c.data.data() + i * c.point_step;
-    std::memcpy(p, points[i].data(), 12);
-    std::memcpy(p + 20, &t_ns[i], 4);
-  }
-  return c;
 }
 
 geometry_msgs::TransformStamped transform(double stamp, const std::string& parent,

@@ -18,6 +18,22 @@ Eigen::Matrix3d planarCov() {
   return c;
 }
 
+/// The measurement Jacobian by central differences of evaluateMeasurement in every state.
+MeasurementJacobian numericJacobian(const EkfMeasurement& m, const StateVector& x, double g) {
+  MeasurementJacobian numeric(m.size, kStateSize);
+  for (int j = 0; j < kStateSize; ++j) {
+    StateVector xp = x, xm = x;
+    xp(j) += 1e-6;
+    xm(j) -= 1e-6;
+    MeasurementVector hp, hm;
+    MeasurementJacobian unused;
+    evaluateMeasurement(m, xp, g, &hp, &unused);
+    evaluateMeasurement(m, xm, g, &hm, &unused);
+    numeric.col(j) = (hp - hm) / 2e-6;
+  }
+  return numeric;
+}
+
 TEST(EkfMeasurement, PlanarPoseSelectsXYYaw) {
   EkfOptions o;
   const auto m = makePoseMeasurement(PoseMeasurement::planar(3.0, 1.0, 2.0, 0.5, planarCov()), o);
@@ -146,16 +162,10 @@ TEST(EkfMeasurement, ScaledTwistModelAndJacobian) {
   EXPECT_NEAR(jac(0, kStateTwistScale), 11.9, 1e-12);
   EXPECT_NEAR(jac(0, kStateVx), 1.004, 1e-12);
   EXPECT_EQ(jac(5, kStateTwistScale), 0.0);
+  const MeasurementJacobian numeric = numericJacobian(*m, x, o.gravity_mps2);
   for (int j = 0; j < kStateSize; ++j) {
-    StateVector xp = x, xm = x;
-    xp(j) += 1e-6;
-    xm(j) -= 1e-6;
-    MeasurementVector hp, hm;
-    MeasurementJacobian unused;
-    evaluateMeasurement(*m, xp, o.gravity_mps2, &hp, &unused);
-    evaluateMeasurement(*m, xm, o.gravity_mps2, &hm, &unused);
     for (int i = 0; i < 6; ++i) {
-      EXPECT_NEAR(jac(i, j), (hp(i) - hm(i)) / 2e-6, 1e-6) << "d h" << i << " / d " << stateName(j);
+      EXPECT_NEAR(jac(i, j), numeric(i, j), 1e-6) << "d h" << i << " / d " << stateName(j);
     }
   }
   // Off: the direct model, the scale never enters.
@@ -224,17 +234,10 @@ TEST(EkfMeasurement, GravityRemovalBothWays) {
   evaluateMeasurement(*m, x, o.gravity_mps2, &h, &jac);
   EXPECT_LT((h - imu.linear_acceleration_mps2 - Eigen::Vector3d(0.3, 0, 0)).norm(), 1e-12);
   // Jacobian: identity on a, finite differences on roll and pitch, nothing else.
+  const MeasurementJacobian numeric = numericJacobian(*m, x, o.gravity_mps2);
   for (int j = 0; j < kStateSize; ++j) {
-    StateVector xp = x, xm = x;
-    xp(j) += 1e-6;
-    xm(j) -= 1e-6;
-    MeasurementVector hp, hm;
-    MeasurementJacobian unused;
-    evaluateMeasurement(*m, xp, o.gravity_mps2, &hp, &unused);
-    evaluateMeasurement(*m, xm, o.gravity_mps2, &hm, &unused);
-    const Eigen::Vector3d numeric = (hp - hm) / 2e-6;
     for (int i = 0; i < 3; ++i) {
-      EXPECT_NEAR(jac(i, j), numeric(i), 1e-6) << "d h" << i << " / d " << stateName(j);
+      EXPECT_NEAR(jac(i, j), numeric(i, j), 1e-6) << "d h" << i << " / d " << stateName(j);
     }
   }
   EXPECT_DOUBLE_EQ(jac(0, kStateAx), 1.0);
