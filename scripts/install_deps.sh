@@ -16,6 +16,7 @@ PACKAGES=(
   python3-std-msgs python3-geometry-msgs python3-sensor-msgs python3-nav-msgs
   python3-diagnostic-msgs python3-tf2-msgs python3-visualization-msgs
   libeigen3-dev libyaml-cpp-dev zlib1g-dev libgtest-dev libbenchmark-dev libtbb-dev libembree-dev
+  libgeographiclib-dev
   rviz xvfb imagemagick clang-format
   clang-14 libclang-rt-14-dev
 )

@@ -31,7 +31,10 @@ rm -rf "$OUT/map" "$OUT/mapping" "$OUT/drive.bag" "$OUT/fixture.launch" "$OUT/fi
 # 1. Mapping pass (every 5th scan, 0.66 deg azimuth) -> map. The KITTI scans are removed after.
 "$SIMULATE" "${TOWN[@]}" --pass mapping --azimuth-step 0.66 --kitti "$OUT/mapping" \
   --kitti-every 5 --quiet
-"$BUILD_MAP" --kitti "$OUT/mapping" --kitti-fields xyzi --output "$OUT/map" --quiet >/dev/null
+# The town is placed in Ann Arbor (UTM 17N) for the GNSS start rostest (vehicle_gnss_start_test.cpp
+# uses the same origin).
+"$BUILD_MAP" --kitti "$OUT/mapping" --kitti-fields xyzi --output "$OUT/map" --quiet \
+  --utm-zone 17N --georef-origin 277000,4686000,250 >/dev/null
 rm -rf "$OUT/mapping"
 
 # 2. The drive (1.33 deg azimuth: 4x fewer points than a real HDL-32E, same geometry).

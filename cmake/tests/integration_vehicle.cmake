@@ -36,8 +36,8 @@ if(TARGET tests)
 endif()
 
 set(GMM_VEHICLE_NODELETS gmm_map_server_nodelet gmm_matcher_nodelet gmm_ekf_nodelet
-  gmm_cloud_merger_nodelet)
-foreach(name nodelets replay robustness bad_input)
+  gmm_cloud_merger_nodelet gmm_gnss_initializer_nodelet)
+foreach(name nodelets replay robustness bad_input gnss_start)
   add_executable(rostest_vehicle_${name} EXCLUDE_FROM_ALL
     test/integration/vehicle_${name}_test.cpp)
   target_link_libraries(rostest_vehicle_${name} gmm_ros ${GTEST_LIBRARIES})

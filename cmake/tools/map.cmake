@@ -3,6 +3,7 @@
 # rosbag reader live in the static library gmm_map_readers so other tools and nodes can reuse
 # them; the KITTI reader is in the ROS-free core (core/mapping/kitti_source.h).
 add_library(gmm_map_readers STATIC
+  src/tools/build_map/build_map_georeference.cpp
   src/tools/build_map/build_map_options.cpp
   src/tools/build_map/build_map_pcd.cpp
   src/tools/build_map/build_map_rosbag.cpp
@@ -20,6 +21,10 @@ gmm_add_tool(build_map SOURCES src/tools/build_map/build_map.cpp LIBS gmm_map_re
 gmm_add_tool(map_info SOURCES src/tools/map_info/map_info.cpp LIBS gmm_core)
 
 if(CATKIN_ENABLE_TESTING)
+  # build_map's georeference options (--utm-zone, --epsg, --mgrs-origin, --georef-origin).
+  catkin_add_gtest(tools_build_map_georeference_test
+    test/tools/build_map/build_map_georeference_test.cpp)
+  target_link_libraries(tools_build_map_georeference_test gmm_map_readers gtest_main)
   # Reader tests write a small bag (no ROS master needed).
   catkin_add_gtest(tools_build_map_readers_test test/tools/build_map/build_map_readers_test.cpp
     WORKING_DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR})

@@ -43,6 +43,29 @@ void toMsg(const MapGeometry& geometry, const RasterOptions& raster, MapIndex& i
   index.chunk_shift = raster.chunk_shift;
 }
 
+void toMsg(const Georeference& g, MapIndex& index) {
+  index.georeferenced = g.present;
+  index.datum = g.datum;
+  index.utm_zone = static_cast<uint8_t>(g.hasGrid() ? g.utm_zone : 0);
+  index.utm_north = g.utm_north;
+  index.epsg = g.hasGrid() ? g.grid().epsg() : 0;
+  index.origin_easting_m = g.origin_easting_m;
+  index.origin_northing_m = g.origin_northing_m;
+  index.origin_up_m = g.origin_up_m;
+}
+
+Georeference georeferenceOf(const MapIndex& index) {
+  Georeference g;
+  g.present = index.georeferenced;
+  g.datum = index.datum;
+  g.utm_zone = index.utm_zone <= 60 ? index.utm_zone : 0;
+  g.utm_north = index.utm_north;
+  g.origin_easting_m = index.origin_easting_m;
+  g.origin_northing_m = index.origin_northing_m;
+  g.origin_up_m = index.origin_up_m;
+  return g;
+}
+
 std::string validateIndex(const MapIndex& index) {
   const MapGeometry g = geometryOf(index);
   const std::string geometry_error = checkMapGeometryBounds(g);

@@ -78,6 +78,7 @@ void MapServer::publishIndex() {
   index->map_directory = store->directory();
   index->map_version = engine_->mapVersion();
   toMsg(store->geometry(), options_.engine.raster, *index);
+  toMsg(store->manifest().georeference, *index);
   for (const MapChunkConstPtr& c : held) {
     index->chunk_x.push_back(c->id().x);
     index->chunk_y.push_back(c->id().y);

@@ -40,6 +40,7 @@
 
 #include "gmm_localization/MapIndex.h"
 #include "gmm_localization/RasterChunk.h"
+#include "gmm_localization/core/map/georeference.h"
 #include "gmm_localization/core/map/map_geometry.h"
 #include "gmm_localization/core/raster/chunk_map.h"
 #include "gmm_localization/core/raster/raster_options.h"
@@ -53,6 +54,9 @@ RasterOptions rasterOptionsOf(const MapIndex& index);
 /// The inverse, for the publisher of an index: writes geometry and raster into index's fields
 /// (geometryOf and rasterOptionsOf read them back unchanged); its other fields are not touched.
 void toMsg(const MapGeometry& geometry, const RasterOptions& raster, MapIndex& index);
+/// The map's georeference in an index, and back (fields: MapIndex.msg).
+void toMsg(const Georeference& georeference, MapIndex& index);
+Georeference georeferenceOf(const MapIndex& index);
 
 /// Empty when `index` describes a usable map, else which field is wrong and why: the geometry
 /// within the map format's physical bounds (checkMapGeometryBounds: resolution in [0.05, 10] m,

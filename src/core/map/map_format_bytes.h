@@ -119,19 +119,24 @@ class ByteReader {
 };
 
 /// The start of every map file: 4 magic bytes, then the format version (u16). Reads both with
-/// r, which must stand at the start of data[0, size); empty when they are `magic` and
-/// kMapFormatVersion, else why not (`kind` names the file expected: "GMM tile file").
+/// r, which must stand at the start of data[0, size); empty when they are `magic` and a version
+/// in [min_version, max_version] (stored in *version), else why not (`kind` names the file
+/// expected: "GMM tile file").
 inline std::string readFileStart(ByteReader& r, const uint8_t* data, size_t size,
-                                 const uint8_t (&magic)[4], const char* kind) {
+                                 const uint8_t (&magic)[4], const char* kind, uint16_t min_version,
+                                 uint16_t max_version, uint16_t* version = nullptr) {
   if (size < 4) return "truncated: " + std::to_string(size) + " bytes, no room for the magic";
   if (!std::equal(data, data + 4, magic)) return std::string("wrong magic (not a ") + kind + ")";
   r.u32("magic");
-  const uint16_t version = r.u16("format version");
+  const uint16_t v = r.u16("format version");
   if (!r.ok()) return r.error();
-  if (version != kMapFormatVersion) {
-    return "unsupported format version " + std::to_string(version) + " (this build reads " +
-           std::to_string(kMapFormatVersion) + ")";
+  if (v < min_version || v > max_version) {
+    const std::string reads = min_version == max_version ? std::to_string(max_version)
+                                                         : std::to_string(min_version) + " to " +
+                                                               std::to_string(max_version);
+    return "unsupported format version " + std::to_string(v) + " (this build reads " + reads + ")";
   }
+  if (version != nullptr) *version = v;
   return {};
 }
 

@@ -76,7 +76,7 @@ std::vector<uint8_t> encodeManifest(const MapManifest& m) {
   std::vector<uint8_t> out;
   ByteWriter w(out);
   w.bytes(kManifestMagic, 4);
-  w.u16(kMapFormatVersion);
+  w.u16(kManifestFormatVersion);
   w.u16(0);
   w.f64(m.geometry.resolution_m);
   w.u32(static_cast<uint32_t>(m.geometry.tile_size_cells));
@@ -84,6 +84,8 @@ std::vector<uint8_t> encodeManifest(const MapManifest& m) {
   w.f64(m.geometry.origin_y_m);
   w.u8(m.georeference.present ? 1 : 0);
   w.str(m.georeference.datum);
+  w.u8(static_cast<uint8_t>(m.georeference.utm_zone));
+  w.u8(m.georeference.utm_north ? 1 : 0);
   w.f64(m.georeference.origin_easting_m);
   w.f64(m.georeference.origin_northing_m);
   w.f64(m.georeference.origin_up_m);
@@ -109,8 +111,10 @@ Result<MapManifest> decodeManifest(const uint8_t* data, size_t size, const std::
     return R::failure("manifest '" + source + "': " + what);
   };
   ByteReader r(data, size);
+  uint16_t version = 0;
   const std::string start =
-      map_format::readFileStart(r, data, size, kManifestMagic, "GMM map manifest");
+      map_format::readFileStart(r, data, size, kManifestMagic, "GMM map manifest",
+                                kOldestManifestVersion, kManifestFormatVersion, &version);
   if (!start.empty()) return fail(start);
   if (size < 12) return fail("truncated: " + std::to_string(size) + " bytes");
   const uint32_t stored_crc = static_cast<uint32_t>(data[size - 4]) | (data[size - 3] << 8) |
@@ -127,7 +131,7 @@ Result<MapManifest> decodeManifest(const uint8_t* data, size_t size, const std::
   body.u32("magic");
   body.u16("format version");
   MapManifest m;
-  m.format_version = kMapFormatVersion;  // readFileStart accepted no other
+  m.format_version = version;
   const uint16_t flags = body.u16("flags");
   m.geometry.resolution_m = body.f64("resolution");
   m.geometry.tile_size_cells = static_cast<int32_t>(body.u32("tile size"));
@@ -135,6 +139,15 @@ Result<MapManifest> decodeManifest(const uint8_t* data, size_t size, const std::
   m.geometry.origin_y_m = body.f64("origin y");
   m.georeference.present = body.u8("georeference flag") != 0;
   m.georeference.datum = body.str("datum", kMaxTextLength);
+  uint8_t zone = 0, north = 1;
+  if (version >= 2) {
+    zone = body.u8("UTM zone");
+    north = body.u8("UTM hemisphere");
+  } else {
+    const GridZone z = zoneFromDatumText(m.georeference.datum);
+    zone = static_cast<uint8_t>(z.zone);
+    north = z.north ? 1 : 0;
+  }
   m.georeference.origin_easting_m = body.f64("origin easting");
   m.georeference.origin_northing_m = body.f64("origin northing");
   m.georeference.origin_up_m = body.f64("origin up");
@@ -142,6 +155,19 @@ Result<MapManifest> decodeManifest(const uint8_t* data, size_t size, const std::
   const uint32_t n_tiles = body.u32("tile count");
   if (!body.ok()) return fail(body.error());
   if (flags != 0) return fail("unknown flags " + std::to_string(flags));
+  if (zone > 60 || north > 1) {
+    return fail("invalid georeference: UTM zone " + std::to_string(zone) + ", hemisphere " +
+                std::to_string(north) + " (zone 0..60, hemisphere 0 south / 1 north)");
+  }
+  m.georeference.utm_zone = zone;
+  m.georeference.utm_north = north != 0;
+  {
+    const Georeference& g = m.georeference;
+    if (g.present && !(std::isfinite(g.origin_easting_m) && std::isfinite(g.origin_northing_m) &&
+                       std::isfinite(g.origin_up_m))) {
+      return fail("invalid georeference: origin not finite");
+    }
+  }
   const std::string geometry_error = checkMapGeometryBounds(m.geometry);
   if (!geometry_error.empty()) return fail("invalid geometry: " + geometry_error);
   // Each tile entry takes at least 48 bytes: refuse a count the file cannot hold.

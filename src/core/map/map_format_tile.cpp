@@ -158,7 +158,7 @@ Result<EncodedTile> encodeTile(const GmmTile& tile, const TileCodecOptions& opti
   out.bytes.reserve(kTileHeaderBytes + stored.size() + kCrcBytes);
   ByteWriter w(out.bytes);
   w.bytes(kTileMagic, 4);
-  w.u16(kMapFormatVersion);
+  w.u16(kTileFormatVersion);
   w.u16(flags);
   w.i32(tile.id().x);
   w.i32(tile.id().y);
@@ -189,7 +189,8 @@ Result<std::shared_ptr<GmmTile>> decodeTile(const uint8_t* data, size_t size,
     return R::failure("tile file '" + source + "': " + what);
   };
   ByteReader r(data, size);
-  const std::string start = map_format::readFileStart(r, data, size, kTileMagic, "GMM tile file");
+  const std::string start = map_format::readFileStart(r, data, size, kTileMagic, "GMM tile file",
+                                                      kTileFormatVersion, kTileFormatVersion);
   if (!start.empty()) return fail(start);
   if (size < kTileHeaderBytes + kCrcBytes) {
     return fail("truncated: " + std::to_string(size) + " bytes, a version-1 tile has at least " +

@@ -7,6 +7,7 @@
 #include <map>
 #include <sstream>
 
+#include "build_map/build_map_georeference.h"
 #include "gmm_localization/core/map/map_format.h"
 
 namespace gmm_localization {
@@ -102,8 +103,14 @@ Filters (applied in this order; counts in the summary):
   --offset X,Y,Z           subtracted from every input point and pose, e.g. a UTM origin, to
                            keep map coordinates small (in double, before float: a float32 map
                            keeps centimetres only within 131 km of its origin); recorded as
-                           the map's georeference
-  --datum TEXT             georeference text, e.g. "WGS84 / UTM zone 17N"
+                           the map's georeference origin
+
+Georeference (map_info prints it; the GNSS initializer needs a zone):
+  --utm-zone ZONE          WGS84 UTM zone of the input's grid: 17N, 33S, EPSG:32617
+  --epsg CODE              the same as an EPSG code (32601-32660 north, 32701-32760 south)
+  --georef-origin E,N,U    the input is already local: the map origin's grid coordinates
+  --mgrs-origin REF[,U]    the same as an MGRS reference (names the zone too)
+  --datum TEXT             free text kept with the map, e.g. "heights above the geoid"
 
 Resources:
   --threads N              fitting threads (2)
@@ -193,6 +200,7 @@ Result<BuildMapConfig> parseBuildMapArgs(int argc, char** argv) {
   BuildMapConfig c;
   MapBuilderOptions& b = c.builder;
   std::string error;
+  GeoreferenceArgs geo;
   bool pose_topic_given = false;
   auto setInput = [&](InputKind k, const std::string& opt) {
     const bool more_pcd = k == InputKind::kPcd && c.input == InputKind::kPcd;
@@ -357,12 +365,24 @@ Result<BuildMapConfig> parseBuildMapArgs(int argc, char** argv) {
       {"--offset",
        [&](const std::string& o, const std::string& v) {
          auto l = parseNumberList(o, v, 3);
-         if (l)
+         if (l) {
            c.offset_m = Eigen::Vector3d((*l)[0], (*l)[1], (*l)[2]);
+           geo.offset_m = c.offset_m;
+         } else
+           error = l.error();
+       }},
+      {"--datum", str(geo.datum)},
+      {"--utm-zone", str(geo.utm_zone)},
+      {"--epsg", str(geo.epsg)},
+      {"--mgrs-origin", str(geo.mgrs_origin)},
+      {"--georef-origin",
+       [&](const std::string& o, const std::string& v) {
+         auto l = parseNumberList(o, v, 3);
+         if (l)
+           geo.georef_origin_m = Eigen::Vector3d((*l)[0], (*l)[1], (*l)[2]);
          else
            error = l.error();
        }},
-      {"--datum", str(b.georeference.datum)},
       {"--threads", intg(b.threads)},
       {"--temp-dir", str(b.temp_directory)},
       {"--spill-buffer-mb", intg(spill_mb)},
@@ -411,12 +431,9 @@ Result<BuildMapConfig> parseBuildMapArgs(int argc, char** argv) {
   if (!(c.synthetic.scan_spacing_m >= 0.05) || !(c.synthetic.azimuth_step_deg >= 0.05)) {
     return R::failure("--scan-spacing must be >= 0.05 m and --azimuth-step >= 0.05 deg");
   }
-  if (c.offset_m != Eigen::Vector3d::Zero() || !b.georeference.datum.empty()) {
-    b.georeference.present = true;
-    b.georeference.origin_easting_m = c.offset_m.x();
-    b.georeference.origin_northing_m = c.offset_m.y();
-    b.georeference.origin_up_m = c.offset_m.z();
-  }
+  auto georeference = resolveGeoreference(geo);
+  if (!georeference) return R::failure(georeference.error());
+  b.georeference = *georeference;
   // The map format's bounds, checked here so that a build never ends in a manifest the reader
   // refuses (or a grid of 1e12 cells): one source of truth, checkMapGeometryBounds.
   const double resolution = b.geometry.resolution_m;

@@ -113,13 +113,7 @@ int main(int argc, char** argv) {
   std::printf("map              %s (format version %u)\n", dir.c_str(), m.format_version);
   std::printf("geometry         %.3f m cells, %d-cell tiles (%.1f m), origin (%.3f, %.3f) m\n",
               g.resolution_m, g.tile_size_cells, g.tileSizeM(), g.origin_x_m, g.origin_y_m);
-  if (m.georeference.present) {
-    std::printf("georeference     '%s', map origin at E %.3f N %.3f U %.3f m\n",
-                m.georeference.datum.c_str(), m.georeference.origin_easting_m,
-                m.georeference.origin_northing_m, m.georeference.origin_up_m);
-  } else {
-    std::printf("georeference     none\n");
-  }
+  std::printf("georeference     %s\n", m.georeference.describe().c_str());
   std::printf("provenance       %s\n", m.provenance.c_str());
   std::printf("tiles            %zu\n", s.tiles);
   std::printf(

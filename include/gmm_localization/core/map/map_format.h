@@ -33,12 +33,15 @@
 //   weight ln(w) uniform in [ln 2^-20, 0] over 65535 steps, then the cell's weights are
 //          renormalised to sum 1: relative error <= 2.2e-4. w < 2^-20: the encoder fails.
 //
-// Manifest `manifest.gmm`, format version 1:
+// Manifest `manifest.gmm`, format version 2 (version 1 is still read):
 //   magic "GMMM", u16 version, u16 flags (0); geometry: f64 resolution [m], u32 tile size
-//   [cells], f64 origin x [m], f64 origin y [m]; georeference: u8 present, string datum, f64
+//   [cells], f64 origin x [m], f64 origin y [m]; georeference (georeference.h): u8 present,
+//   string datum, [version 2 only: u8 UTM zone 0..60 (0: text only), u8 north 0/1,] f64
 //   easting, northing, up of the map origin [m]; string provenance; u32 tile count, then per
 //   tile: i32 x, i32 y, string file name, u64 byte size, u32 tile CRC-32, f32 z min, f32
 //   z max [m], 4 x u32 cells with 0..3 components; u32 CRC-32. Strings: u32 length + bytes.
+//   A version 1 manifest's zone is taken from its datum text when that names one
+//   (zoneFromDatumText); writers always write version 2.
 //
 // Failure behaviour: decoders and readers return a failure whose reason names the file and the
 // problem (missing, truncated, CRC mismatch, wrong magic, unsupported version, inconsistent
@@ -59,12 +62,15 @@
 #include <vector>
 
 #include "gmm_localization/core/common/result.h"
+#include "gmm_localization/core/map/georeference.h"
 #include "gmm_localization/core/map/gmm_tile.h"
 #include "gmm_localization/core/map/map_geometry.h"
 
 namespace gmm_localization {
 
-constexpr uint16_t kMapFormatVersion = 1;
+constexpr uint16_t kTileFormatVersion = 1;      ///< tile files written and read
+constexpr uint16_t kManifestFormatVersion = 2;  ///< manifests written
+constexpr uint16_t kOldestManifestVersion = 1;  ///< oldest manifest still read
 constexpr const char* kManifestFileName = "manifest.gmm";
 
 constexpr double kMinMapResolutionM = 0.05;  ///< smallest accepted cell edge [m]
@@ -97,18 +103,8 @@ struct TileInfo {
   std::array<uint32_t, kMaxMixtureComponents + 1> cells_by_components{};
 };
 
-/// Optional link from the map frame to a geodetic frame. The map frame's origin (0, 0, 0) is at
-/// (origin_easting_m, origin_northing_m, origin_up_m) in the frame named by `datum`.
-struct Georeference {
-  bool present = false;
-  std::string datum;  ///< free text, e.g. "WGS84 / UTM zone 17N"
-  double origin_easting_m = 0.0;
-  double origin_northing_m = 0.0;
-  double origin_up_m = 0.0;
-};
-
 struct MapManifest {
-  uint16_t format_version = kMapFormatVersion;
+  uint16_t format_version = kManifestFormatVersion;  ///< as read (written: always the newest)
   MapGeometry geometry;
   Georeference georeference;
   std::string provenance;  ///< free text: tool, inputs and options that built the map
