@@ -17,6 +17,8 @@ roslaunch_add_file_check(launch/localization.launch map:=/tmp/no_map merge_cloud
   use_initial_pose:=true diagnostics_aggregator:=true)
 roslaunch_add_file_check(launch/localization.launch map:=/tmp/no_map ins_adapter:=true
   ins_driver:=clearpath_applanix_bridge)
+roslaunch_add_file_check(launch/localization.launch map:=/tmp/no_map ekf:=false
+  prior_topic:=/odometry/filtered gnss_initializer:=true gnss_heading_topic:=/gnss/heading)
 roslaunch_add_file_check(launch/replay.launch map:=/tmp/no_map bag:=/tmp/no.bag)
 roslaunch_add_file_check(launch/replay.launch map:=/tmp/no_map bag:=/tmp/no.bag
   record:=/tmp/out.bag rviz:=true merge_clouds:=true)
@@ -37,10 +39,13 @@ endif()
 
 set(GMM_VEHICLE_NODELETS gmm_map_server_nodelet gmm_matcher_nodelet gmm_ekf_nodelet
   gmm_cloud_merger_nodelet gmm_gnss_initializer_nodelet)
-foreach(name nodelets replay robustness bad_input gnss_start)
+foreach(name nodelets replay robustness bad_input gnss_start external_filter)
   add_executable(rostest_vehicle_${name} EXCLUDE_FROM_ALL
     test/integration/vehicle_${name}_test.cpp)
   target_link_libraries(rostest_vehicle_${name} gmm_ros ${GTEST_LIBRARIES})
+  if(name STREQUAL "external_filter")  # reads config/robot_localization.yaml
+    target_link_libraries(rostest_vehicle_${name} yaml-cpp)
+  endif()
   target_include_directories(rostest_vehicle_${name} SYSTEM PRIVATE ${GTEST_INCLUDE_DIRS})
   add_dependencies(rostest_vehicle_${name} gmm_vehicle_fixture ${GMM_VEHICLE_NODELETS})
   if(TARGET tests)

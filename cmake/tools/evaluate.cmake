@@ -14,7 +14,8 @@ add_library(gmm_evaluate STATIC
   src/tools/evaluate/evaluate_recorded.cpp
   src/tools/evaluate/evaluate_report.cpp
   src/tools/evaluate/evaluate_summary.cpp
-  src/tools/evaluate/evaluate_yaml.cpp)
+  src/tools/evaluate/evaluate_yaml.cpp
+  src/tools/common/progress_bar.cpp)
 target_include_directories(gmm_evaluate PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/src/tools)
 target_link_libraries(gmm_evaluate PUBLIC gmm_ros yaml-cpp Threads::Threads)
 # The package's config/ directory is the default for --config-dir.

@@ -22,27 +22,6 @@ using namespace vehicle_test;  // NOLINT: test code
 const char* kManager = "/localization/localization_manager";
 std::unique_ptr<Outputs> outputs;
 
-/// topic -> nodes publishing it, and topic -> nodes subscribing to it (master graph).
-struct Graph {
-  std::map<std::string, std::set<std::string>> publishers, subscribers;
-};
-
-bool readGraph(Graph* g) {
-  XmlRpc::XmlRpcValue request, response, payload;
-  request[0] = ros::this_node::getName();
-  if (!ros::master::execute("getSystemState", request, response, payload, true)) return false;
-  for (int kind = 0; kind < 2; ++kind) {
-    auto& out = kind == 0 ? g->publishers : g->subscribers;
-    for (int i = 0; i < payload[kind].size(); ++i) {
-      const std::string topic = payload[kind][i][0];
-      for (int j = 0; j < payload[kind][i][1].size(); ++j) {
-        out[topic].insert(static_cast<std::string>(payload[kind][i][1][j]));
-      }
-    }
-  }
-  return true;
-}
-
 TEST(VehicleNodelets, AllNodeletsRunInOneManager) {
   ASSERT_TRUE(ros::service::waitForService(std::string(kManager) + "/list", 30000));
   nodelet::NodeletList list;

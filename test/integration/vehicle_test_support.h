@@ -10,6 +10,7 @@
 #include <map>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,7 @@
 #include <ros/ros.h>
 #include <rosgraph_msgs/Log.h>
 #include <tf2_msgs/TFMessage.h>
+#include <xmlrpcpp/XmlRpcValue.h>
 
 #include "gmm_localization/MatchStatus.h"
 #include "gmm_localization/ros/pose_conversion.h"
@@ -258,6 +260,27 @@ class Outputs {
   std::vector<SeenDiagnostic> diagnostic_history_;
   std::vector<std::pair<double, rosgraph_msgs::Log>> logs_;
 };
+
+/// topic -> nodes publishing it, and topic -> nodes subscribing to it (master graph).
+struct Graph {
+  std::map<std::string, std::set<std::string>> publishers, subscribers;
+};
+
+inline bool readGraph(Graph* g) {
+  XmlRpc::XmlRpcValue request, response, payload;
+  request[0] = ros::this_node::getName();
+  if (!ros::master::execute("getSystemState", request, response, payload, true)) return false;
+  for (int kind = 0; kind < 2; ++kind) {
+    auto& out = kind == 0 ? g->publishers : g->subscribers;
+    for (int i = 0; i < payload[kind].size(); ++i) {
+      const std::string topic = payload[kind][i][0];
+      for (int j = 0; j < payload[kind][i][1].size(); ++j) {
+        out[topic].insert(static_cast<std::string>(payload[kind][i][1][j]));
+      }
+    }
+  }
+  return true;
+}
 
 /// The error of the last EKF estimate the truth covers (the clock ends with the bag's last IMU
 /// sample, a few ms after its last ground truth); invalid when there is none.

@@ -22,6 +22,7 @@
 #include "bench/bench_options.h"
 #include "bench/bench_output.h"
 #include "bench/bench_peers.h"
+#include "common/cli_args.h"
 #include "gmm_localization/core/common/types.h"
 #include "gmm_localization/core/matching/registration.h"
 
@@ -271,7 +272,8 @@ int main(int argc, char** argv) {
   BenchOptions o;
   o.reg.global.max_evaluations = 0;  // the benchmark measures complete searches (--global-budget)
   bool help = false;
-  if (!parseBenchOptions(argc, argv, o, help)) {
+  gmm_localization::tools::NormalizedArgs args(argc, argv);
+  if (!parseBenchOptions(args.argc(), args.argv(), o, help)) {
     std::fputs(benchUsage(), help ? stdout : stderr);
     return help ? 0 : 2;
   }

@@ -12,6 +12,7 @@
 #include "build_map/build_map_options.h"
 #include "build_map/build_map_readers.h"
 #include "build_map/build_map_synthetic.h"
+#include "common/cli_args.h"
 #include "common/progress_bar.h"
 #include "gmm_localization/core/mapping/map_builder.h"
 
@@ -253,7 +254,8 @@ int main(int argc, char** argv) {
   // Every reader reports errors as values; this is the last line of defence against a library
   // (rosbag, the standard library) throwing.
   try {
-    return run(argc, argv);
+    gmm_localization::tools::NormalizedArgs args(argc, argv);
+    return run(args.argc(), args.argv());
   } catch (const std::exception& e) {
     std::cerr << "\nbuild_map: error: " << e.what() << "\n";
   } catch (...) {

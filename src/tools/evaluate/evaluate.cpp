@@ -5,6 +5,7 @@
 #include <iostream>
 #include <stdexcept>
 
+#include "common/cli_args.h"
 #include "evaluate/evaluate_options.h"
 
 #ifndef GMM_CONFIG_DIR
@@ -34,7 +35,8 @@ void writeTraversal(const TraversalFigure& f, const std::string& dir, RunInfo& i
 int main(int argc, char** argv) {
   EvaluateCommand cmd;
   try {
-    cmd = parseEvaluateCommand(argc, argv, GMM_CONFIG_DIR);
+    gmm_localization::tools::NormalizedArgs args(argc, argv);
+    cmd = parseEvaluateCommand(args.argc(), args.argv(), GMM_CONFIG_DIR);
   } catch (const std::invalid_argument& e) {
     std::fprintf(stderr, "evaluate: %s\n\n%s", e.what(), evaluateUsage());
     return 2;

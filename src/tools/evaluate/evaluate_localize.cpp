@@ -7,6 +7,7 @@
 #include <memory>
 #include <ostream>
 
+#include "common/progress_bar.h"
 #include "evaluate/evaluate_map.h"
 #include "evaluate/evaluate_yaml.h"
 #include "gmm_localization/core/common/types.h"
@@ -60,7 +61,9 @@ class BagRun {
         out_(out),
         offset_stride_(c.offset_scans > 0
                            ? std::max<size_t>(1, total_scans / static_cast<size_t>(c.offset_scans))
-                           : 0) {}
+                           : 0),
+        total_scans_(total_scans),
+        progress_("evaluate", c.progress) {}
 
   void imu(const ImuMeasurement& m) {
     sampleEkf(m.stamp_s);
@@ -92,6 +95,7 @@ class BagRun {
     }
     pipeline_.addScan(std::move(s.scan), c_.latency_s);
     collect();
+    showProgress(false);
   }
   bool done() const { return started_ && last_scan_s_ - first_scan_s_ >= c_.max_duration_s; }
 
@@ -102,9 +106,30 @@ class BagRun {
     out_.info.duration_s = started_ ? last_scan_s_ - first_scan_s_ + 0.1 : 0.0;
     out_.info.scans_in_bag = scan_index_;
     out_.info.dropped_scans = pipeline_.droppedScans();
+    showProgress(true);
   }
 
  private:
+  /// Scans done of the bag's (or of max_duration_s), matches so far, Fig. 8 scans submitted.
+  void showProgress(bool final_line) {
+    const double by_count =
+        total_scans_ > 0 ? double(scan_index_) / double(total_scans_) : std::nan("");
+    const double by_time = std::isfinite(c_.max_duration_s) && c_.max_duration_s > 0.0
+                               ? (last_scan_s_ - first_scan_s_) / c_.max_duration_s
+                               : std::nan("");
+    const double fraction = std::isfinite(by_time) ? std::max(by_count, by_time) : by_count;
+    const std::string detail =
+        "scan " + tools::withCommas(scan_index_) + "/" + tools::withCommas(total_scans_) + ", " +
+        tools::withCommas(out_.matches.size()) + " matches" +
+        (offsets_ != nullptr ? ", Fig. 8 scans " + std::to_string(offsets_submitted_)
+                             : std::string());
+    if (final_line) {
+      progress_.finish(detail);
+    } else {
+      progress_.update(fraction, detail);
+    }
+  }
+
   void start(double stamp) {
     started_ = true;
     first_scan_s_ = stamp;
@@ -227,6 +252,8 @@ class BagRun {
   OffsetExperiment* offsets_;
   EvaluationResults& out_;
   size_t offset_stride_;
+  size_t total_scans_;
+  tools::ProgressBar progress_;
   size_t offsets_submitted_ = 0;
   size_t scan_index_ = 0;
   bool started_ = false;

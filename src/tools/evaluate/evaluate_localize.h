@@ -38,6 +38,7 @@ struct BagEvaluationConfig {
   double max_duration_s = std::numeric_limits<double>::infinity();  ///< of the bag [s]
   int offset_scans = 100;  ///< scans used for Fig. 8 (evenly spread; 0: none)
   OffsetOptions offsets;
+  bool progress = true;  ///< a progress bar on stderr (evaluate --quiet: none)
 };
 
 /// Runs mode A; progress lines go to `log`. Fails with the reason (options, bag, map).

@@ -54,6 +54,7 @@ Mode A, read a localization bag directly (deterministic, faster than real time):
     --offset-radius M       offsets uniform within this radius [10]
     --offset-heading DEG    and within +-this heading [15]
     --seed N                offset generator seed [1]
+    --quiet                 no progress bar on stderr
     --cloud-topic T --odom-topic T --imu-topic T --gt-topic T   [/velodyne_points /ins/odom
                             /imu/data /ground_truth/odom]
 
@@ -88,6 +89,10 @@ EvaluateCommand parseEvaluateCommand(int argc, char** argv, const std::string& d
     if (key == "-h" || key == "--help") {
       c.mode = EvaluateCommand::Mode::kHelp;
       return c;
+    }
+    if (key == "--quiet") {
+      b.progress = false;
+      continue;
     }
     if (i + 1 >= argc) throw std::invalid_argument(key + " needs a value");
     const std::string v = argv[++i];

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <string>
 
+#include "common/cli_args.h"
 #include "gmm_localization/core/map/map_store.h"
 #include "gmm_localization/core/mapping/kitti_source.h"
 #include "kitti_check/kitti_check_cells.h"
@@ -23,8 +24,9 @@ namespace {
 
 constexpr double kExampleRadiusM = 30.0;  // example cells come from near the keyframes
 
-void usage() {
-  std::printf(
+void usage(FILE* out = stderr) {
+  std::fprintf(
+      out,
       "kitti_check cells|register --data DIR --work DIR [options]\n"
       "  --data DIR        keyframes, in a layout build_map --kitti takes:\n"
       "                    DIR/NNNNNN/points.bin (keyframe dumps: float32 x,y,z) or\n"
@@ -220,7 +222,15 @@ int runRegister(Args a) {
 
 int main(int argc, char** argv) {
   Args a;
-  if (!parse(argc, argv, a)) {
+  gmm_localization::tools::NormalizedArgs args(argc, argv);
+  for (int i = 1; i < args.argc(); ++i) {
+    const std::string w = args.argv()[i];
+    if (w == "--help" || w == "-h") {
+      usage(stdout);
+      return gmm_localization::tools::kExitOk;
+    }
+  }
+  if (!parse(args.argc(), args.argv(), a)) {
     usage();
     return 2;
   }

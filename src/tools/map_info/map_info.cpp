@@ -8,6 +8,7 @@
 #include <iostream>
 #include <string>
 
+#include "common/cli_args.h"
 #include "gmm_localization/core/map/map_store.h"
 
 using namespace gmm_localization;
@@ -62,6 +63,9 @@ int main(int argc, char** argv) {
   bool verify = true, want_cell = false;
   int stride = 1, cell_radius = 1;
   double cx = 0, cy = 0;
+  gmm_localization::tools::NormalizedArgs args(argc, argv);
+  argc = args.argc();
+  argv = args.argv();
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto value = [&]() -> const char* {

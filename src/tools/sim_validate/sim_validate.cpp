@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "common/cli_args.h"
 #include "gmm_localization/sim/hdl32e.h"
 #include "gmm_localization/sim/lidar_simulator.h"
 #include "gmm_localization/sim/route.h"
@@ -84,6 +85,9 @@ int main(int argc, char** argv) {
   sim::TownConfig town_cfg;
   town_cfg.size_x_m = town_cfg.size_y_m = 1000.0;
   sim::PassType pass = sim::PassType::kDowntown;
+  gmm_localization::tools::NormalizedArgs args(argc, argv);
+  argc = args.argc();
+  argv = args.argv();
   for (int k = 1; k < argc; ++k) {
     const std::string a = argv[k];
     if (a == "--help" || a == "-h") {
@@ -91,8 +95,9 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (k + 1 >= argc) {
-      std::fprintf(stderr, "sim_validate: %s needs a value\n", a.c_str());
-      return 1;
+      std::fprintf(stderr, "sim_validate: %s needs a value (or is unknown; see --help)\n",
+                   a.c_str());
+      return gmm_localization::tools::kExitUsage;
     }
     const std::string v = argv[++k];
     if (a == "--real")
@@ -111,12 +116,12 @@ int main(int argc, char** argv) {
       auto t = sim::parsePassType(v);
       if (!t) {
         std::fprintf(stderr, "sim_validate: %s\n", t.error().c_str());
-        return 1;
+        return gmm_localization::tools::kExitUsage;
       }
       pass = *t;
     } else {
       std::fprintf(stderr, "sim_validate: unknown option %s\n%s", a.c_str(), kHelp);
-      return 1;
+      return gmm_localization::tools::kExitUsage;
     }
   }
 

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <memory>
 
+#include "common/cli_args.h"
 #include "gmm_localization/sim/kitti_writer.h"
 #include "gmm_localization/sim/simulation.h"
 #include "simulate/simulate_bag_writer.h"
@@ -51,8 +52,12 @@ int fail(const std::string& what) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  auto parsed = tools::parseSimulateOptions(argc, argv);
-  if (!parsed) return fail(parsed.error() + "\n(simulate --help lists the options)");
+  tools::NormalizedArgs args(argc, argv);
+  auto parsed = tools::parseSimulateOptions(args.argc(), args.argv());
+  if (!parsed) {
+    fail(parsed.error() + "\n(simulate --help lists the options)");
+    return tools::kExitUsage;
+  }
   const tools::SimulateOptions& opt = *parsed;
   if (opt.help) {
     std::fputs(tools::simulateHelp(), stdout);
