@@ -80,7 +80,7 @@ Input (exactly one kind):
     --seed N (1)  --scan-spacing M (1.0)  --azimuth-step DEG (0.2)
 
 Output:
-  --output DIR             map directory (created); refuses to replace a map unless --overwrite
+  --output DIR, --out DIR  map directory (created); refuses to replace a map unless --overwrite
   --overwrite              replace the map in DIR: the new map is built beside it and swapped
                            in when complete; a failed or killed build leaves the old map intact
 
@@ -235,6 +235,7 @@ Result<BuildMapConfig> parseBuildMapArgs(int argc, char** argv) {
   std::string pcd_only;  // the last PCD-only option given
   std::map<std::string, Handler> valued = {
       {"--output", str(b.output_directory)},
+      {"--out", str(b.output_directory)},  // the other tools' name
       {"--pcd",
        [&](const std::string& o, const std::string& v) {
          setInput(InputKind::kPcd, o);

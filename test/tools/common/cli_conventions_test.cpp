@@ -91,6 +91,11 @@ TEST(CliConventions, EqualsFormIsTheSameAsTwoWords) {
     EXPECT_NE(a.err.find("/nonexistent"), std::string::npos)
         << c[0].first << " does not name the missing input: " << a.err;
   }
+  // build_map takes the other tools' --out for its --output.
+  const ToolRun out = run("build_map", "--pcd /nonexistent/a.pcd --out=/proc/nonexistent/out");
+  EXPECT_EQ(out.code, kExitFailed) << out.err;
+  EXPECT_EQ(out.err,
+            run("build_map", "--pcd /nonexistent/a.pcd --output /proc/nonexistent/out").err);
   // A value after '=' reaches the option: an out-of-range one is refused by name.
   const ToolRun bad = run("map_info", "--stride=0 /nonexistent/map");
   EXPECT_EQ(bad.code, kExitUsage) << bad.err;
