@@ -126,7 +126,7 @@ class BagRun {
     if (final_line) {
       progress_.finish(detail);
     } else {
-      progress_.update(fraction, detail);
+      progress_.update(std::min(fraction, 0.999), detail);  // 100 % is finish()'s line
     }
   }
 
