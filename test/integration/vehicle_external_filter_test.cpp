@@ -24,10 +24,10 @@
 #include <string>
 
 #include <nodelet/NodeletList.h>
-#include <xmlrpcpp/XmlRpcValue.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_broadcaster.h>
 #include <tf2_ros/transform_listener.h>
+#include <xmlrpcpp/XmlRpcValue.h>
 #include <yaml-cpp/yaml.h>
 
 #include "vehicle_test_player.h"
@@ -96,7 +96,8 @@ bool sendMapToOdom(const ros::Time& stamp, const geometry_msgs::Pose& map_T_base
   } catch (const tf2::TransformException&) {
     return false;
   }
-  const Eigen::Isometry3d map_T_odom = fromMsg(map_T_base) * fromMsg(odom_T_base.transform).inverse();
+  const Eigen::Isometry3d map_T_odom =
+      fromMsg(map_T_base) * fromMsg(odom_T_base.transform).inverse();
   geometry_msgs::TransformStamped t;
   t.header.stamp = stamp;
   t.header.frame_id = "map";
