@@ -8,7 +8,13 @@
 #  - vehicle_robustness: localization.launch under missing TF, IMU and INS dropouts, a vehicle
 #                        off the map (the test node plays the drive with those faults);
 #  - vehicle_bad_input:  localization.launch against the bad-input matrix (bad clouds, stamps,
-#                        NaN inputs, a rogue map index, broken map directories) while it drives.
+#                        NaN inputs, a rogue map index, broken map directories) while it drives;
+#  - vehicle_gnss_start: localization.launch gnss_initializer:=true started from GNSS fixes;
+#  - vehicle_external_filter: localization.launch ekf:=false prior_topic:=/odometry/filtered with
+#                        a stand-in for robot_localization (wiring, TF, config/robot_localization
+#                        .yaml), and vehicle_ekf_no_tf (same binary): ekf_publish_tf:=false;
+#  - vehicle_ins_adapter: localization.launch ins_adapter:=true ins_driver:=autoware_lvx on a
+#                        drive shaped like that driver's output.
 find_package(rostest REQUIRED)
 find_package(roslaunch REQUIRED)
 
@@ -16,7 +22,7 @@ roslaunch_add_file_check(launch/localization.launch map:=/tmp/no_map)
 roslaunch_add_file_check(launch/localization.launch map:=/tmp/no_map merge_clouds:=true rviz:=true
   use_initial_pose:=true diagnostics_aggregator:=true)
 roslaunch_add_file_check(launch/localization.launch map:=/tmp/no_map ins_adapter:=true
-  ins_driver:=clearpath_applanix_bridge)
+  ins_driver:=clearpath_applanix_bridge ekf_publish_tf:=false)
 roslaunch_add_file_check(launch/localization.launch map:=/tmp/no_map ekf:=false
   prior_topic:=/odometry/filtered gnss_initializer:=true gnss_heading_topic:=/gnss/heading)
 roslaunch_add_file_check(launch/replay.launch map:=/tmp/no_map bag:=/tmp/no.bag)
@@ -38,8 +44,8 @@ if(TARGET tests)
 endif()
 
 set(GMM_VEHICLE_NODELETS gmm_map_server_nodelet gmm_matcher_nodelet gmm_ekf_nodelet
-  gmm_cloud_merger_nodelet gmm_gnss_initializer_nodelet)
-foreach(name nodelets replay robustness bad_input gnss_start external_filter)
+  gmm_cloud_merger_nodelet gmm_gnss_initializer_nodelet gmm_ins_adapter_nodelet)
+foreach(name nodelets replay robustness bad_input gnss_start external_filter ins_adapter)
   add_executable(rostest_vehicle_${name} EXCLUDE_FROM_ALL
     test/integration/vehicle_${name}_test.cpp)
   target_link_libraries(rostest_vehicle_${name} gmm_ros ${GTEST_LIBRARIES})
@@ -54,3 +60,6 @@ foreach(name nodelets replay robustness bad_input gnss_start external_filter)
   add_rostest(test/integration/vehicle_${name}.test ARGS fixture:=${GMM_VEHICLE_FIXTURE}
     DEPENDENCIES rostest_vehicle_${name})
 endforeach()
+# The same test node with our EKF kept but not broadcasting TF (ekf_publish_tf:=false).
+add_rostest(test/integration/vehicle_ekf_no_tf.test ARGS fixture:=${GMM_VEHICLE_FIXTURE}
+  DEPENDENCIES rostest_vehicle_external_filter)
