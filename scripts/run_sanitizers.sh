@@ -10,8 +10,10 @@
 #         (cmake/sanitize.cmake says why).
 #   tsan  thread: the tests that run threads of the core and simulator - the map server engine
 #         (unit_chunk_engine_test, unit_chunk_engine_retry_test), the map builder
-#         (unit_map_builder_test) and the simulator (test/unit/sim). The matcher's worker thread
-#         runs only in the rostests (ROS libraries are not instrumented), so TSan does not see it.
+#         (unit_map_builder_test), the simulator (test/unit/sim), the task pool a match runs on
+#         (unit_task_pool_test) and the parallel branch-and-bound (unit_grid_search_parallel_test).
+#         The matcher's worker thread runs only in the rostests (ROS libraries are not
+#         instrumented), so TSan does not see it.
 #         False positives inside Embree and TBB are suppressed (scripts/tsan.supp says why).
 # Logs: $GMM_WS/sanitizers/<asan|tsan>/<test>.log; a failing test's report is printed. Exit status
 # non-zero when a build or a test fails. GMM_SANITIZERS selects the passes ("asan tsan" by default;
@@ -186,10 +188,12 @@ for s in $SANITIZERS; do
       ;;
     tsan)
       # The threaded tests: every simulator test (the ray caster and the runs use a thread pool),
-      # the chunk engine's worker threads (serving, tile retries), the map builder's parallel fit.
+      # the chunk engine's worker threads (serving, tile retries), the map builder's parallel fit,
+      # the match's task pool and the search's parallel passes.
       pass tsan thread "$TSAN_CXX" unit_:test/unit/sim unit_:test/unit/raster/chunk_engine_test.cpp \
         unit_:test/unit/raster/chunk_engine_retry_test.cpp \
-        unit_:test/unit/mapping/map_builder_test.cpp || status=1
+        unit_:test/unit/mapping/map_builder_test.cpp unit_:test/unit/common/task_pool_test.cpp \
+        unit_:test/unit/matching/grid_search_parallel_test.cpp || status=1
       ;;
     *) echo "[sanitizers] unknown pass '$s' (asan, tsan)" >&2; status=1 ;;
   esac

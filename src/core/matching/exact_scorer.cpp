@@ -95,11 +95,29 @@ double ExactScorer::kernel(double d) const {
   return kernel_table_[i] + a * (kernel_table_[i + 1] - kernel_table_[i]);
 }
 
-double ExactScorer::score(const PointList& base_points, const Pose6& pose) const {
+double ExactScorer::score(const PointList& base_points, const Pose6& pose, TaskPool* pool) const {
   const Eigen::Isometry3d T = toIsometry(pose);
-  double sum = 0.0;
-  for (const Eigen::Vector3f& q : base_points) sum += pointLogLikelihood(T * q.cast<double>());
-  return sum;
+  const size_t blocks = (base_points.size() + kBlockPoints - 1) / kBlockPoints;
+  auto block_sum = [&](size_t b) {
+    double sum = 0.0;
+    const size_t end = std::min(base_points.size(), (b + 1) * kBlockPoints);
+    for (size_t i = b * kBlockPoints; i < end; ++i) {
+      sum += pointLogLikelihood(T * base_points[i].cast<double>());
+    }
+    return sum;
+  };
+  double partial[16];
+  std::vector<double> many;
+  double* sums = partial;
+  if (blocks > 16) {
+    many.resize(blocks);
+    sums = many.data();
+  }
+  parallelFor(blocks > 1 ? pool : nullptr, static_cast<int>(blocks),
+              [&](int b) { sums[b] = block_sum(static_cast<size_t>(b)); });
+  double total = 0.0;
+  for (size_t b = 0; b < blocks; ++b) total += sums[b];
+  return total;
 }
 
 }  // namespace gmm_localization

@@ -47,7 +47,7 @@ double& coord(Pose6& p, int a) {
 
 /// One pattern search from `start`, constrained to the box around `centre`.
 HillClimbOutcome climb(const ExactScorer& scorer, const PointList& base_points, const Pose6& start,
-                       const Pose6& centre, const HillClimbOptions& o) {
+                       const Pose6& centre, const HillClimbOptions& o, TaskPool* pool) {
   const std::array<double, kAxes> limit = {
       o.max_xy_m, o.max_xy_m, o.max_z_m, o.max_roll_pitch_rad, o.max_roll_pitch_rad, o.max_yaw_rad};
   std::array<double, kAxes> step = {o.initial_xy_step_m,      o.initial_xy_step_m,
@@ -58,7 +58,7 @@ HillClimbOutcome climb(const ExactScorer& scorer, const PointList& base_points, 
                                               o.min_angle_step_rad, o.min_angle_step_rad};
   HillClimbOutcome out;
   out.pose = start;
-  out.score_start = out.score = scorer.score(base_points, start);
+  out.score_start = out.score = scorer.score(base_points, start, pool);
   out.evaluations = 1;
   Pose6 start_copy = centre;
   bool any_step_left = true;
@@ -72,7 +72,7 @@ HillClimbOutcome climb(const ExactScorer& scorer, const PointList& base_points, 
         const double origin = coord(start_copy, a);
         v += sign * step[a];
         if (std::abs(v - origin) > limit[a] + 1e-12) continue;
-        const double s = scorer.score(base_points, trial);
+        const double s = scorer.score(base_points, trial, pool);
         ++out.evaluations;
         if (s > out.score) {
           out.score = s;
@@ -100,9 +100,9 @@ HillClimbOutcome climb(const ExactScorer& scorer, const PointList& base_points, 
 }
 
 HillClimbOutcome hillClimb(const ExactScorer& scorer, const PointList& base_points,
-                           const Pose6& start, const HillClimbOptions& o) {
+                           const Pose6& start, const HillClimbOptions& o, TaskPool* pool) {
   if (o.coarse_points == 0 || base_points.size() < 2 * o.coarse_points) {
-    return climb(scorer, base_points, start, start, o);
+    return climb(scorer, base_points, start, start, o, pool);
   }
   PointList coarse;
   coarse.reserve(o.coarse_points);
@@ -114,17 +114,17 @@ HillClimbOutcome hillClimb(const ExactScorer& scorer, const PointList& base_poin
   first.min_xy_step_m *= 4.0;
   first.min_z_step_m *= 4.0;
   first.min_angle_step_rad *= 4.0;
-  const HillClimbOutcome c = climb(scorer, coarse, start, start, first);
+  const HillClimbOutcome c = climb(scorer, coarse, start, start, first, pool);
   HillClimbOptions second = o;
   second.initial_xy_step_m = std::min(o.initial_xy_step_m, 2.0 * first.min_xy_step_m);
   second.initial_z_step_m = std::min(o.initial_z_step_m, 2.0 * first.min_z_step_m);
   second.initial_angle_step_rad =
       std::min(o.initial_angle_step_rad, 2.0 * first.min_angle_step_rad);
   second.max_evaluations = std::max(1, o.max_evaluations - c.evaluations);
-  HillClimbOutcome out = climb(scorer, base_points, c.pose, start, second);
+  HillClimbOutcome out = climb(scorer, base_points, c.pose, start, second, pool);
   out.evaluations += c.evaluations;
   // The coarse climb's pose could score below the start on all points: never return worse.
-  out.score_start = scorer.score(base_points, start);
+  out.score_start = scorer.score(base_points, start, pool);
   ++out.evaluations;
   if (out.score_start > out.score) {
     out.pose = start;

@@ -95,7 +95,7 @@ class Geometry {
 }  // namespace
 
 MatchCertificate certifyOptimum(const SearchProblem& problem, const SearchOutcome& optimum,
-                                const CertificateOptions& o) {
+                                const CertificateOptions& o, TaskPool* pool) {
   MatchCertificate out;
   if (!o.enabled) return out;
   out.failure = CertificateFailure::kNone;
@@ -162,6 +162,22 @@ MatchCertificate certifyOptimum(const SearchProblem& problem, const SearchOutcom
     }
   }
 
+  // Best-first, one node at a time as a single thread would go. With a pool, the children of
+  // the node after the popped one are scored beside the popped node's children; they are used
+  // only when that node is still the next one popped (nothing pushed meanwhile outranks it),
+  // and counted only then: the proof, its evaluations and its budget are the same as on one
+  // thread.
+  auto expand = [&](const Node& n, int64_t scores[4]) {
+    const int h = 1 << (n.layer - 1);
+    problem.scoreQuad(n.heading_index, n.layer - 1, n.tx, n.ty, h, scores);
+  };
+  auto sameNode = [](const Node& a, const Node& b) {
+    return a.bound == b.bound && a.heading_index == b.heading_index && a.tx == b.tx &&
+           a.ty == b.ty && a.layer == b.layer;
+  };
+  bool have_next = false;  // next_scores holds the children of next_node, scored ahead
+  Node next_node{};
+  int64_t next_scores[4];
   while (!queue.empty()) {
     if (out.evaluations > o.max_evaluations) {
       out.failure = CertificateFailure::kBudget;
@@ -192,7 +208,16 @@ MatchCertificate certifyOptimum(const SearchProblem& problem, const SearchOutcom
     const int child = n.layer - 1;
     const int h = 1 << child;
     int64_t scores[4];
-    problem.scoreQuad(n.heading_index, child, n.tx, n.ty, h, scores);
+    if (have_next && sameNode(next_node, n)) {
+      std::copy(next_scores, next_scores + 4, scores);
+      have_next = false;
+    } else if (pool != nullptr && !queue.empty() && queue.top().layer > 0) {
+      next_node = queue.top();
+      pool->run(2, [&](int k) { expand(k == 0 ? n : next_node, k == 0 ? scores : next_scores); });
+      have_next = true;
+    } else {
+      expand(n, scores);
+    }
     for (int b = 0; b < 2; ++b) {
       for (int a = 0; a < 2; ++a) {
         const int cx = n.tx + a * h, cy = n.ty + b * h;

@@ -19,7 +19,7 @@ std::string CovarianceOptions::validate() const {
 }
 
 MatchCovariance searchCovariance(const SearchProblem& problem, const SearchOutcome& optimum,
-                                 const CovarianceOptions& o) {
+                                 const CovarianceOptions& o, TaskPool* pool) {
   const SearchWindow& w = problem.window();
   const double res = problem.map().geometry().resolution_m;
   const int r = std::max(1, static_cast<int>(std::round(o.radius_m / res)));
@@ -36,19 +36,20 @@ MatchCovariance searchCovariance(const SearchProblem& problem, const SearchOutco
                          : 1;
   // Scores in whole-scan units: each heading's thinned sum scaled by the scan points over the
   // points it scored (exact when nothing is thinned).
+  // Headings in parallel (each fills its own row).
   std::vector<std::vector<double>> scores(j1 - j0 + 1);
-  std::vector<int64_t> block;
-  double peak = -std::numeric_limits<double>::infinity();
-  for (int j = j0; j <= j1; ++j) {
-    const int64_t scored = problem.scoreBlock(j, tx0, ty0, nx, ny, block, stride);
+  parallelFor(pool, j1 - j0 + 1, [&](int k) {
+    std::vector<int64_t> block;
+    const int64_t scored = problem.scoreBlock(j0 + k, tx0, ty0, nx, ny, block, stride);
     const double to_scan = static_cast<double>(problem.scanPoints()) /
                            static_cast<double>(std::max<int64_t>(1, scored));
-    std::vector<double>& s = scores[j - j0];
+    std::vector<double>& s = scores[static_cast<size_t>(k)];
     s.resize(block.size());
-    for (size_t i = 0; i < block.size(); ++i) {
-      s[i] = static_cast<double>(block[i]) * to_scan;
-      peak = std::max(peak, s[i]);
-    }
+    for (size_t i = 0; i < block.size(); ++i) s[i] = static_cast<double>(block[i]) * to_scan;
+  });
+  double peak = -std::numeric_limits<double>::infinity();
+  for (const std::vector<double>& row : scores) {
+    for (double v : row) peak = std::max(peak, v);
   }
   const ScoreQuantizer q(problem.map().options());
   const double temperature = o.temperature_per_point * std::max<int64_t>(1, problem.scanPoints());

@@ -39,7 +39,8 @@ bool poseUsable(const MapGeometry& g, const Pose6& pose) {
 }  // namespace
 
 ObstacleLabels classifyObstacles(const ChunkMap& map, const PointList& base_points,
-                                 const Pose6& pose, const ObstacleOptions& options) {
+                                 const Pose6& pose, const ObstacleOptions& options,
+                                 TaskPool* pool) {
   ObstacleLabels out;
   out.label.assign(base_points.size(), PointClass::kUnknown);
   out.mahalanobis.assign(base_points.size(), std::numeric_limits<float>::infinity());
@@ -69,29 +70,45 @@ ObstacleLabels classifyObstacles(const ChunkMap& map, const PointList& base_poin
     return out;
   }
   const RasterWindow window(map, lo.x, lo.y, hi.x, hi.y);
-  for (size_t i = 0; i < base_points.size(); ++i) {
-    const Eigen::Vector3f& q = base_points[i];
-    if (!inRange(q)) {
-      ++out.unclassified;
-      continue;
+  // Blocks of points in parallel, each with its own counters (added after).
+  constexpr size_t kBlock = 8192;
+  const size_t blocks = (base_points.size() + kBlock - 1) / kBlock;
+  struct Counts {
+    size_t obstacles = 0, over_empty_cells = 0, unclassified = 0;
+  };
+  std::vector<Counts> counts(blocks);
+  parallelFor(blocks > 1 ? pool : nullptr, static_cast<int>(blocks), [&](int b) {
+    Counts& n = counts[static_cast<size_t>(b)];
+    const size_t end = std::min(base_points.size(), (static_cast<size_t>(b) + 1) * kBlock);
+    for (size_t i = static_cast<size_t>(b) * kBlock; i < end; ++i) {
+      const Eigen::Vector3f& q = base_points[i];
+      if (!inRange(q)) {
+        ++n.unclassified;
+        continue;
+      }
+      const Eigen::Vector3d p = T * q.cast<double>();
+      const CellIndex c = g.cellAt(p.x(), p.y());
+      const MapChunk* chunk = window.chunk(c.x, c.y);
+      double d = std::numeric_limits<double>::infinity();
+      if (chunk != nullptr && chunk->hasMixtures()) {
+        const int mask = chunk->cells() - 1;
+        d = chunk->mixture(static_cast<int>(c.x & mask), static_cast<int>(c.y & mask))
+                .mahalanobis(p.z());
+      }
+      out.mahalanobis[i] = static_cast<float>(d);
+      if (d <= options.mahalanobis_threshold) {
+        out.label[i] = PointClass::kMap;
+      } else {
+        out.label[i] = PointClass::kObstacle;
+        ++n.obstacles;
+        if (!std::isfinite(d)) ++n.over_empty_cells;
+      }
     }
-    const Eigen::Vector3d p = T * q.cast<double>();
-    const CellIndex c = g.cellAt(p.x(), p.y());
-    const MapChunk* chunk = window.chunk(c.x, c.y);
-    double d = std::numeric_limits<double>::infinity();
-    if (chunk != nullptr && chunk->hasMixtures()) {
-      const int mask = chunk->cells() - 1;
-      d = chunk->mixture(static_cast<int>(c.x & mask), static_cast<int>(c.y & mask))
-              .mahalanobis(p.z());
-    }
-    out.mahalanobis[i] = static_cast<float>(d);
-    if (d <= options.mahalanobis_threshold) {
-      out.label[i] = PointClass::kMap;
-    } else {
-      out.label[i] = PointClass::kObstacle;
-      ++out.obstacles;
-      if (!std::isfinite(d)) ++out.over_empty_cells;
-    }
+  });
+  for (const Counts& n : counts) {
+    out.obstacles += n.obstacles;
+    out.over_empty_cells += n.over_empty_cells;
+    out.unclassified += n.unclassified;
   }
   return out;
 }

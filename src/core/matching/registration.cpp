@@ -8,6 +8,13 @@
 
 namespace gmm_localization {
 
+Registration::Registration(const RegistrationOptions& options, std::shared_ptr<TaskPool> pool)
+    : options_(options), pool_(std::move(pool)) {
+  if (pool_ == nullptr && TaskPool::resolve(options_.threads) > 1) {
+    pool_ = std::make_shared<TaskPool>(options_.threads);
+  }
+}
+
 std::string RegistrationOptions::validate() const {
   std::string e = filter.validate();
   if (!e.empty()) return "filter: " + e;
@@ -29,6 +36,10 @@ std::string RegistrationOptions::validate() const {
   if (!e.empty()) return "global: " + e;
   if (!(min_map_coverage >= 0.0 && min_map_coverage <= 1.0)) {
     return "min_map_coverage must be in [0, 1]";
+  }
+  if (threads < 0 || threads > TaskPool::kMaxThreads) {
+    return "threads=" + std::to_string(threads) + " must be in [0, " +
+           std::to_string(TaskPool::kMaxThreads) + "] (0: one per hardware thread)";
   }
   return {};
 }
@@ -193,7 +204,7 @@ RegistrationResult<PreparedSearch> Registration::prepare(const ChunkMap& map,
   if (window.sizeH() >= options_.interval_search_min_headings && options_.global.max_points > 0) {
     f.points = thin(f.points, options_.global.max_points);
   }
-  auto problem = SearchProblem::create(map, f.points, window);
+  auto problem = SearchProblem::create(map, f.points, window, pool_.get());
   if (!problem.ok()) return R::failure(RegistrationError::kOffMap, problem.error());
   return PreparedSearch{std::move(f), z_offset, std::move(problem.value())};
 }
@@ -237,7 +248,7 @@ SearchOutcome Registration::search(const SearchProblem& problem,
     if (complete != nullptr) *complete = g.complete;
     return std::move(g.best);
   }
-  return branchAndBoundSearch(problem, options_.branch_and_bound, traversal);
+  return branchAndBoundSearch(problem, options_.branch_and_bound, traversal, pool_.get());
 }
 
 RegistrationResult<MatchResult> Registration::finish(
@@ -268,7 +279,7 @@ RegistrationResult<MatchResult> Registration::finish(
   HillClimbOptions hc = options_.hill_climb;
   hc.max_yaw_rad = std::max(hc.max_yaw_rad, options_.heading_step_rad);
   hc.max_xy_m = std::max(hc.max_xy_m, map.geometry().resolution_m);
-  out.refinement = hillClimb(scorer, refine_points, out.search.pose, hc);
+  out.refinement = hillClimb(scorer, refine_points, out.search.pose, hc, pool_.get());
   out.pose = out.refinement.pose;
   out.pose.yaw = wrapAngle(out.pose.yaw);
   out.log_likelihood_per_point =
@@ -276,7 +287,8 @@ RegistrationResult<MatchResult> Registration::finish(
   double t3 = tick();
   if (timing) timing->refine_s = t3 - t2;
 
-  out.covariance_detail = searchCovariance(prepared.problem, out.search, options_.covariance);
+  out.covariance_detail =
+      searchCovariance(prepared.problem, out.search, options_.covariance, pool_.get());
   out.covariance_xyh = out.covariance_detail.covariance;
   const double t3c = tick();
   if (timing) timing->covariance_s = t3c - t3;
@@ -284,7 +296,8 @@ RegistrationResult<MatchResult> Registration::finish(
       prepared.problem.window().sizeH() >= options_.interval_search_min_headings) {
     out.certificate.failure = CertificateFailure::kGlobalSearch;  // uncertified: see the enum
   } else {
-    out.certificate = certifyOptimum(prepared.problem, out.search, options_.certificate);
+    out.certificate =
+        certifyOptimum(prepared.problem, out.search, options_.certificate, pool_.get());
   }
   {
     const double res = map.geometry().resolution_m;
@@ -325,7 +338,7 @@ RegistrationResult<MatchResult> Registration::finish(
                       "numerical failure: non-finite pose or covariance");
   }
   if (options_.classify_obstacles) {
-    out.obstacles = classifyObstacles(map, base_points, out.pose, options_.obstacles);
+    out.obstacles = classifyObstacles(map, base_points, out.pose, options_.obstacles, pool_.get());
   }
   if (timing) timing->obstacles_s = tick() - t4;
   return out;

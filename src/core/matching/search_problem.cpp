@@ -137,7 +137,7 @@ size_t RasterWindow::chunksPresent() const {
 }
 
 Result<SearchProblem> SearchProblem::create(const ChunkMap& map, const PointList& points,
-                                            const SearchWindow& window) {
+                                            const SearchWindow& window, TaskPool* pool) {
   const std::string invalid = window.validate();
   if (!invalid.empty()) return Result<SearchProblem>::failure("search window: " + invalid);
   if (points.empty()) return Result<SearchProblem>::failure("no points left to match");
@@ -151,7 +151,14 @@ Result<SearchProblem> SearchProblem::create(const ChunkMap& map, const PointList
   // Heights do not change with heading: bin them once.
   std::vector<int32_t> z_bins(points.size());
   for (size_t i = 0; i < points.size(); ++i) z_bins[i] = map.zBin(prior.z + points[i].z());
-  for (int j = 0; j < window.sizeH(); ++j) {
+  // Headings in parallel, each with its own extent (combined after, in heading order).
+  struct Extent {
+    int64_t gx_min, gy_min, gx_max, gy_max;
+  };
+  std::vector<Extent> extents(static_cast<size_t>(window.sizeH()),
+                              {gx_min, gy_min, gx_max, gy_max});
+  parallelFor(pool, window.sizeH(), [&](int j) {
+    Extent& e = extents[static_cast<size_t>(j)];
     const double yaw = prior.yaw + (j - window.half_h) * window.heading_step_rad;
     const double c = std::cos(yaw), s = std::sin(yaw);
     std::vector<CellPoint>& out = rotated[j];
@@ -179,11 +186,17 @@ Result<SearchProblem> SearchProblem::create(const ChunkMap& map, const PointList
     }
     out.resize(w);
     for (const CellPoint& p : out) {
-      gx_min = std::min<int64_t>(gx_min, p.gx);
-      gx_max = std::max<int64_t>(gx_max, p.gx);
-      gy_min = std::min<int64_t>(gy_min, p.gy);
-      gy_max = std::max<int64_t>(gy_max, p.gy);
+      e.gx_min = std::min<int64_t>(e.gx_min, p.gx);
+      e.gx_max = std::max<int64_t>(e.gx_max, p.gx);
+      e.gy_min = std::min<int64_t>(e.gy_min, p.gy);
+      e.gy_max = std::max<int64_t>(e.gy_max, p.gy);
     }
+  });
+  for (const Extent& e : extents) {
+    gx_min = std::min(gx_min, e.gx_min);
+    gx_max = std::max(gx_max, e.gx_max);
+    gy_min = std::min(gy_min, e.gy_min);
+    gy_max = std::max(gy_max, e.gy_max);
   }
 
   // The coarsest layer, searched exhaustively (Algorithm 3), is the smallest that covers the

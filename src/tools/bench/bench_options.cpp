@@ -39,6 +39,10 @@ const char* benchUsage() {
          "  --track-offset-m M   tracking window (+-2 m, +-3 deg): offsets within M (1.5)\n"
          "  --track-offset-deg D and within +-D degrees (2.5)\n"
          "  --seed N             offset seed (1)\n"
+         "  --threads N          also run both windows with the match on N threads (0: one per\n"
+         "                       hardware thread): a table of the stages' times on 1 and N\n"
+         "                       threads, the speed-ups and whether every result is identical (1:\n"
+         "                       one thread only)\n"
          "  --out DIR            also write DIR/scans.csv (one row per registration),\n"
          "                       DIR/summary.md (the tables as printed) and DIR/summary.json\n"
          "Peers' target cloud (from --mapping):\n"
@@ -142,6 +146,7 @@ bool parseBenchOptions(int argc, char** argv, BenchOptions& o, bool& help) {
       {"--track-offset-m", real(o.track_offset_m, 0.0)},
       {"--track-offset-deg", real(o.track_offset_deg, 0.0)},
       {"--seed", integer(o.seed, 0)},
+      {"--threads", integer(o.threads, 0)},
       {"--peer-target-stride", integer(o.peer_target.stride, 1)},
       {"--peer-target-exclude", integer(o.peer_target.exclude, -1)},
       {"--peer-target-radius", real(o.peer_target.radius_m, 1.0)},

@@ -18,6 +18,7 @@ struct BenchOptions {
   KittiInput mapping;   ///< --mapping, --mapping-poses, the same calibration and layout
   std::string out_dir;  ///< --out: per-scan CSV and the summary (markdown, JSON); empty: none
   int count = 30;
+  int threads = 1;           ///< --threads: also run both windows on this many threads (1: not)
   int exhaustive_every = 3;  ///< exhaustive reference on every n-th scan of each window
   int peer_count = 20;
   PeerTargetOptions peer_target;

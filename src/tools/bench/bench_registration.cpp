@@ -42,6 +42,24 @@ double now() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
+/// What a match returned, compared bit for bit between runs on different thread counts.
+struct MatchKey {
+  std::string failure;  ///< empty when a pose came out
+  int heading_index = 0, tx = 0, ty = 0;
+  int64_t score = 0;
+  double pose[6] = {0, 0, 0, 0, 0, 0};
+  double refined_score = 0.0;
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  bool certified = false;
+  size_t obstacles = 0;
+  bool operator==(const MatchKey& o) const {
+    return failure == o.failure && heading_index == o.heading_index && tx == o.tx && ty == o.ty &&
+           score == o.score && std::equal(pose, pose + 6, o.pose) &&
+           refined_score == o.refined_score && covariance == o.covariance &&
+           certified == o.certified && obstacles == o.obstacles;
+  }
+};
+
 struct WindowRow {
   std::string name;
   std::vector<double> filter_ms, search_ms, filter_search_ms, total_ms, fraction, error_m,
@@ -53,6 +71,8 @@ struct WindowRow {
   int success = 0, runs = 0, equal = 0, compared = 0, failures = 0;
   std::vector<double> exhaustive_ms;
   std::vector<ScanRecord> records;  ///< one per scan, for --out
+  std::vector<MatchKey> results;    ///< one per scan, to compare runs on different threads
+  int threads = 1;
 };
 
 std::string fmt(const char* format, double a, double b) {
@@ -70,10 +90,120 @@ void priorError(const Pose6& prior, const Eigen::Isometry3d& truth, ScanRecord& 
 
 bool success(double err_m, double err_deg) { return err_m < 0.5 && err_deg < 1.0; }
 
+MatchKey keyOf(const RegistrationResult<MatchResult>& r) {
+  MatchKey k;
+  if (!r.ok()) {
+    k.failure = r.error();
+    return k;
+  }
+  k.heading_index = r->search.heading_index;
+  k.tx = r->search.tx;
+  k.ty = r->search.ty;
+  k.score = r->search.score;
+  const Pose6& p = r->pose;
+  const double v[6] = {p.x, p.y, p.z, p.roll, p.pitch, p.yaw};
+  std::copy(v, v + 6, k.pose);
+  k.refined_score = r->refinement.score;
+  k.covariance = r->covariance_xyh;
+  k.certified = r->certificate.certified;
+  k.obstacles = r->obstacles.obstacles;
+  return k;
+}
+
+/// One registration of scan `s` from `req` by `reg`, timed by stage, into `row` (and one record).
+/// Returns the search optimum when the search completed.
+bool matchInto(const Registration& reg, const ChunkMap& map, const BenchScan& s,
+               const MatchRequest& req, const std::string& section, WindowRow& row,
+               SearchOutcome* optimum) {
+  ++row.runs;
+  row.records.emplace_back();
+  ScanRecord& rec = row.records.back();
+  rec.section = section;
+  rec.window = row.name;
+  rec.scan = s.index;
+  rec.raw_points = static_cast<double>(s.points.size());
+  priorError(req.prior, s.truth, rec);
+  const double t0 = now();
+  auto prepared = reg.prepare(map, s.points, req);
+  if (!prepared.ok()) {
+    ++row.failures;
+    rec.failure = prepared.error();
+    row.results.push_back({});
+    row.results.back().failure = prepared.error();
+    std::fprintf(stderr, "scan %d: %s\n", s.index, prepared.error().c_str());
+    return false;
+  }
+  const double t1 = now();
+  bool complete = true;
+  const SearchOutcome bb = reg.search(prepared->problem, nullptr, &complete);
+  const double t2 = now();
+  if (!complete) {
+    ++row.failures;
+    rec.failure = "search stopped at its budget";
+    row.results.push_back({});
+    row.results.back().failure = rec.failure;
+    std::fprintf(stderr, "scan %d: search stopped at its budget\n", s.index);
+    return false;
+  }
+  if (optimum != nullptr) *optimum = bb;
+  const double n = static_cast<double>(prepared->problem.points(0).size());
+  const double t3 = now();
+  RegistrationTiming timing;
+  auto r = reg.finish(map, s.points, req, std::move(prepared.value()), bb, now, &timing);
+  const double t4 = now();
+  row.results.push_back(keyOf(r));
+  row.refine_ms.push_back(timing.refine_s * 1e3);
+  row.covariance_ms.push_back(timing.covariance_s * 1e3);
+  row.certificate_ms.push_back(timing.certificate_s * 1e3);
+  row.obstacles_ms.push_back(timing.obstacles_s * 1e3);
+  row.filter_ms.push_back((t1 - t0) * 1e3);
+  row.search_ms.push_back((t2 - t1) * 1e3);
+  row.filter_search_ms.push_back((t2 - t0) * 1e3);
+  row.total_ms.push_back((t2 - t0 + t4 - t3) * 1e3);
+  row.fraction.push_back(bb.stats.fraction());
+  row.points.push_back(n);
+  row.lookups.push_back(n * bb.stats.evaluations);
+  rec.search_points = n;
+  rec.prepare_ms = row.filter_ms.back();
+  rec.search_ms = row.search_ms.back();
+  rec.total_ms = row.total_ms.back();
+  rec.evaluations_fraction = bb.stats.fraction();
+  if (!r.ok()) {
+    ++row.failures;
+    rec.failure = r.error();
+    std::fprintf(stderr, "scan %d: %s\n", s.index, r.error().c_str());
+    return true;
+  }
+  const Pose6 t = fromIsometry(s.truth);
+  const double e = std::hypot(r->pose.x - t.x, r->pose.y - t.y);
+  const double eh = std::abs(angleDiff(r->pose.yaw, t.yaw)) * 180.0 / M_PI;
+  row.error_m.push_back(e);
+  row.error_deg.push_back(eh);
+  row.success += success(e, eh);
+  rec.matched = true;
+  rec.error_m = e;
+  rec.error_deg = eh;
+  rec.success = success(e, eh);
+  rec.certified = r->certificate.certified ? 1 : 0;
+  if (r->certificate.certified) {
+    ++row.certified;
+    row.certified_wrong += success(e, eh) ? 0 : 1;
+  }
+  return true;
+}
+
+/// Registers every scan from a random offset prior in the window; with `many`, each scan is
+/// registered right after again by a registration on `threads` threads (the same request) into
+/// `many`, so that the two rows see the same machine state, scan by scan.
 void runWindow(const BenchOptions& o, const ChunkMap& map, const std::vector<BenchScan>& scans,
                double half_m, double half_deg, double off_m, double off_deg, WindowRow& row,
-               const std::string& section = "window") {
-  const Registration reg(o.reg);
+               const std::string& section = "window", WindowRow* many = nullptr, int threads = 1) {
+  RegistrationOptions ro = o.reg;
+  ro.threads = 1;
+  const Registration reg(ro);
+  ro.threads = threads;
+  const Registration reg_many(ro);
+  if (many != nullptr) many->threads = reg_many.pool() ? reg_many.pool()->threads() : 1;
   std::mt19937 rng(o.seed);
   // The exhaustive reference runs after the timed pass: seconds of it between matches would
   // flush the caches that a vehicle's consecutive matches share.
@@ -90,77 +220,12 @@ void runWindow(const BenchOptions& o, const ChunkMap& map, const std::vector<Ben
     req.prior = offsetPrior(s.truth, off_m, off_deg * M_PI / 180.0, rng);
     req.half_x_m = req.half_y_m = half_m;
     req.half_heading_rad = half_deg * M_PI / 180.0;
-    ++row.runs;
-    row.records.emplace_back();
-    ScanRecord& rec = row.records.back();
-    rec.section = section;
-    rec.window = row.name;
-    rec.scan = s.index;
-    rec.raw_points = static_cast<double>(s.points.size());
-    priorError(req.prior, s.truth, rec);
-    const double t0 = now();
-    auto prepared = reg.prepare(map, s.points, req);
-    if (!prepared.ok()) {
-      ++row.failures;
-      rec.failure = prepared.error();
-      std::fprintf(stderr, "scan %d: %s\n", s.index, prepared.error().c_str());
-      continue;
-    }
-    const double t1 = now();
-    bool complete = true;
-    const SearchOutcome bb = reg.search(prepared->problem, nullptr, &complete);
-    const double t2 = now();
-    if (!complete) {
-      ++row.failures;
-      rec.failure = "search stopped at its budget";
-      std::fprintf(stderr, "scan %d: search stopped at its budget\n", s.index);
-      continue;
-    }
-    if (o.exhaustive_every > 0 && i % o.exhaustive_every == 0) {
+    SearchOutcome bb;
+    const bool searched = matchInto(reg, map, s, req, section, row, &bb);
+    if (searched && o.exhaustive_every > 0 && i % o.exhaustive_every == 0) {
       checks.push_back({i, req, bb, row.records.size() - 1});
     }
-    const double n = static_cast<double>(prepared->problem.points(0).size());
-    const double t3 = now();
-    RegistrationTiming timing;
-    auto r = reg.finish(map, s.points, req, std::move(prepared.value()), bb, now, &timing);
-    const double t4 = now();
-    row.refine_ms.push_back(timing.refine_s * 1e3);
-    row.covariance_ms.push_back(timing.covariance_s * 1e3);
-    row.certificate_ms.push_back(timing.certificate_s * 1e3);
-    row.obstacles_ms.push_back(timing.obstacles_s * 1e3);
-    row.filter_ms.push_back((t1 - t0) * 1e3);
-    row.search_ms.push_back((t2 - t1) * 1e3);
-    row.filter_search_ms.push_back((t2 - t0) * 1e3);
-    row.total_ms.push_back((t2 - t0 + t4 - t3) * 1e3);
-    row.fraction.push_back(bb.stats.fraction());
-    row.points.push_back(n);
-    row.lookups.push_back(n * bb.stats.evaluations);
-    rec.search_points = n;
-    rec.prepare_ms = row.filter_ms.back();
-    rec.search_ms = row.search_ms.back();
-    rec.total_ms = row.total_ms.back();
-    rec.evaluations_fraction = bb.stats.fraction();
-    if (!r.ok()) {
-      ++row.failures;
-      rec.failure = r.error();
-      std::fprintf(stderr, "scan %d: %s\n", s.index, r.error().c_str());
-      continue;
-    }
-    const Pose6 t = fromIsometry(s.truth);
-    const double e = std::hypot(r->pose.x - t.x, r->pose.y - t.y);
-    const double eh = std::abs(angleDiff(r->pose.yaw, t.yaw)) * 180.0 / M_PI;
-    row.error_m.push_back(e);
-    row.error_deg.push_back(eh);
-    row.success += success(e, eh);
-    rec.matched = true;
-    rec.error_m = e;
-    rec.error_deg = eh;
-    rec.success = success(e, eh);
-    rec.certified = r->certificate.certified ? 1 : 0;
-    if (r->certificate.certified) {
-      ++row.certified;
-      row.certified_wrong += success(e, eh) ? 0 : 1;
-    }
+    if (many != nullptr) matchInto(reg_many, map, s, req, "threads", *many, nullptr);
   }
   for (const Check& c : checks) {
     auto prepared = reg.prepare(map, scans[c.scan].points, c.request);
@@ -233,6 +298,84 @@ void printWindows(Report& out, const std::vector<WindowRow>& rows) {
         median(r.error_m), median(r.error_deg), percentile(r.error_m, 99), median(r.certificate_ms),
         r.certified, r.runs, r.certified_wrong);
   }
+}
+
+/// The machine's own ceiling for `threads` threads at this moment: the same fixed piece of
+/// arithmetic run `threads` times on one thread and once on each of `threads` threads,
+/// median ratio of five tries. On a shared or virtual machine it can be well below the thread
+/// count; the match's speed-up is read against it.
+double machineCeiling(int threads) {
+  auto piece = [] {
+    volatile double sink = 0.0;
+    double x = 1.0;
+    for (int i = 0; i < 4000000; ++i) x = x * 1.0000001 + 1e-9;
+    sink = x;
+    (void)sink;
+  };
+  std::vector<double> ratios;
+  for (int k = 0; k < 5; ++k) {
+    const double t0 = now();
+    for (int i = 0; i < threads; ++i) piece();
+    const double t1 = now();
+    std::vector<std::thread> pool;
+    for (int i = 1; i < threads; ++i) pool.emplace_back(piece);
+    piece();
+    for (std::thread& t : pool) t.join();
+    const double t2 = now();
+    ratios.push_back((t1 - t0) / std::max(1e-9, t2 - t1));
+  }
+  return median(ratios);
+}
+
+/// Median of the per-scan ratios a / b (scans where both ran).
+double medianRatio(const std::vector<double>& a, const std::vector<double>& b) {
+  std::vector<double> r;
+  for (size_t i = 0; i < std::min(a.size(), b.size()); ++i) {
+    if (b[i] > 0.0) r.push_back(a[i] / b[i]);
+  }
+  return median(r);
+}
+
+/// The same windows on one and on N threads: each stage's median time on both, the whole
+/// match's speed-up, and how many results are identical bit for bit (pose, search optimum,
+/// refined score, covariance, certificate, obstacle count).
+JsonObject printThreads(Report& out, const WindowRow& one, const WindowRow& many) {
+  const int n = many.threads;
+  int identical = 0, compared = 0;
+  for (size_t i = 0; i < std::min(one.results.size(), many.results.size()); ++i) {
+    ++compared;
+    identical += one.results[i] == many.results[i] ? 1 : 0;
+  }
+  auto pair = [&](const std::vector<double>& a, const std::vector<double>& b) {
+    return fmt("%.1f / %.1f", median(a), median(b));
+  };
+  const double speedup_median = median(one.total_ms) / std::max(1e-9, median(many.total_ms));
+  const double speedup_p99 =
+      percentile(one.total_ms, 99) / std::max(1e-9, percentile(many.total_ms, 99));
+  out.print(
+      "| %s | %s | %s | %s | %s | %s | %s | %s | %s | %.2fx / %.2fx / %.2fx | %d/%d |\n",
+      one.name.c_str(), pair(one.filter_ms, many.filter_ms).c_str(),
+      pair(one.search_ms, many.search_ms).c_str(), pair(one.refine_ms, many.refine_ms).c_str(),
+      pair(one.covariance_ms, many.covariance_ms).c_str(),
+      pair(one.certificate_ms, many.certificate_ms).c_str(),
+      pair(one.obstacles_ms, many.obstacles_ms).c_str(), pair(one.total_ms, many.total_ms).c_str(),
+      fmt("%.1f / %.1f", percentile(one.total_ms, 99), percentile(many.total_ms, 99)).c_str(),
+      speedup_median, speedup_p99, medianRatio(one.total_ms, many.total_ms), identical, compared);
+  JsonObject j;
+  j.add("name", one.name)
+      .add("threads", n)
+      .add("match_total_ms_median_1", median(one.total_ms))
+      .add("match_total_ms_median_n", median(many.total_ms))
+      .add("match_total_ms_p99_1", percentile(one.total_ms, 99))
+      .add("match_total_ms_p99_n", percentile(many.total_ms, 99))
+      .add("speedup_median", speedup_median)
+      .add("speedup_p99", speedup_p99)
+      .add("speedup_per_scan_median", medianRatio(one.total_ms, many.total_ms))
+      .add("search_ms_median_1", median(one.search_ms))
+      .add("search_ms_median_n", median(many.search_ms))
+      .add("identical_results", identical)
+      .add("compared", compared);
+  return j;
 }
 
 /// The data set's summary lines: poses, scans, skipped poses, layout, calibration.
@@ -331,7 +474,8 @@ int main(int argc, char** argv) {
   const std::time_t t = std::time(nullptr);
   std::strftime(date, sizeof(date), "%Y-%m-%d", std::localtime(&t));
   const std::string load_start = loadAverage();
-  out.print("# Registration benchmark, %s, one thread\n\n", date);
+  out.print("# Registration benchmark, %s, one thread%s\n\n", date,
+            o.threads != 1 ? " (and the threads table)" : "");
   out.print("load average at start (1 min, %d cores): %s\n",
             static_cast<int>(std::thread::hardware_concurrency()), load_start.c_str());
   printData(out, "test scans", o.scans, data);
@@ -356,13 +500,17 @@ int main(int argc, char** argv) {
       .add("heading_step_deg", o.reg.heading_step_rad * 180.0 / M_PI);
   if (with_peers) summary.add("mapping_scans", dataJson(o.mapping, mapping));
 
-  std::vector<WindowRow> rows(2);
-  rows[0].name =
+  std::vector<WindowRow> rows(2), many(2);
+  WindowRow* many0 = o.threads != 1 ? &many[0] : nullptr;
+  WindowRow* many1 = o.threads != 1 ? &many[1] : nullptr;
+  rows[0].name = many[0].name =
       fmt("paper: 25 m x 25 m, +-15 deg (offsets within %g m, %g deg)", o.offset_m, o.offset_deg);
-  runWindow(o, map.value(), scans.value(), 12.5, 15.0, o.offset_m, o.offset_deg, rows[0]);
-  rows[1].name = fmt("tracking: +-2 m, +-3 deg (offsets within %g m, %g deg)", o.track_offset_m,
-                     o.track_offset_deg);
-  runWindow(o, map.value(), scans.value(), 2.0, 3.0, o.track_offset_m, o.track_offset_deg, rows[1]);
+  runWindow(o, map.value(), scans.value(), 12.5, 15.0, o.offset_m, o.offset_deg, rows[0], "window",
+            many0, o.threads);
+  rows[1].name = many[1].name = fmt("tracking: +-2 m, +-3 deg (offsets within %g m, %g deg)",
+                                    o.track_offset_m, o.track_offset_deg);
+  runWindow(o, map.value(), scans.value(), 2.0, 3.0, o.track_offset_m, o.track_offset_deg, rows[1],
+            "window", many1, o.threads);
   out.print("## Search windows\n\n");
   out.print(
       "Offsets: paper window within %g m, +-%g deg (--offset-m, --offset-deg); tracking window "
@@ -373,6 +521,34 @@ int main(int argc, char** argv) {
                              windowJson(rows[0], 12.5, 15.0, o.offset_m, o.offset_deg),
                              windowJson(rows[1], 2.0, 3.0, o.track_offset_m, o.track_offset_deg)});
   for (const WindowRow& r : rows) records.insert(records.end(), r.records.begin(), r.records.end());
+
+  if (o.threads != 1) {
+    // The same scans and priors with the match on N threads, each scan right after its
+    // one-thread match (runWindow): the ratios come from one run, scan by scan.
+    const double ceiling = machineCeiling(many[0].threads);
+    out.print("\n## Threads: the whole match on 1 and %d threads (load average now %s)\n\n",
+              many[0].threads, loadAverage().c_str());
+    out.print(
+        "This machine's own ceiling now: %.2fx (a fixed piece of arithmetic on 1 and on %d "
+        "threads, median of five; a shared or virtual machine gives less than the thread "
+        "count).\n\n",
+        ceiling, many[0].threads);
+    summary.add("machine_ceiling", ceiling);
+    out.print(
+        "Each cell: median ms on 1 / %d threads. Speed-up of the whole match: ratio of the "
+        "medians / of the p99s / median of the per-scan ratios. Identical: the same pose, search "
+        "optimum, refined score, covariance, certificate and obstacle count, bit for bit.\n\n",
+        many[0].threads);
+    out.print(
+        "| window | prepare | search | refine | covariance | certificate | obstacles | match total "
+        "(median) | match total (p99) | speed-up | identical |\n");
+    out.print("|---|---|---|---|---|---|---|---|---|---|---|\n");
+    std::vector<JsonObject> threads_json;
+    for (size_t w = 0; w < rows.size(); ++w) {
+      threads_json.push_back(printThreads(out, rows[w], many[w]));
+    }
+    summary.add("threads", threads_json);
+  }
 
   std::vector<JsonObject> global_json;
   if (o.global && o.global_count > 0) {

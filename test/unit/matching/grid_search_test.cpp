@@ -10,32 +10,13 @@
 #include "gmm_localization/core/raster/rasterizer.h"
 #include "support/random_chunk_map.h"
 #include "support/random_map.h"
+#include "support/search_cases.h"
 
 namespace gmm_localization {
 namespace {
 
-/// A window around a uniform random prior in [-xy, xy]^2 (z in [0, z_max), any heading), with
-/// half extents in [half_min, half_min + half_span) [m] and half heading below heading_max.
-SearchWindow randomWindow(std::mt19937& rng, double xy, double z_max, double half_min,
-                          double half_span, double heading_max) {
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  Pose6 prior;
-  prior.x = -xy + 2.0 * xy * u(rng);
-  prior.y = -xy + 2.0 * xy * u(rng);
-  prior.z = z_max * u(rng);
-  prior.yaw = 6.28 * u(rng);
-  const double half_x = half_min + half_span * u(rng);
-  const double half_y = half_min + half_span * u(rng);
-  const double half_heading = heading_max * u(rng);
-  return SearchWindow::fromExtent(prior, half_x, half_y, half_heading, 0.02, 0.2);
-}
-
-void expectSame(const SearchOutcome& a, const SearchOutcome& b, int c) {
-  EXPECT_EQ(a.score, b.score) << "case " << c;
-  EXPECT_EQ(a.heading_index, b.heading_index) << "case " << c;
-  EXPECT_EQ(a.tx, b.tx) << "case " << c;
-  EXPECT_EQ(a.ty, b.ty) << "case " << c;
-}
+using testing::expectSame;
+using testing::randomWindow;
 
 TEST(GridSearch, BranchAndBoundEqualsExhaustiveOnRandomCases) {
   const GmmMap map = testing::randomMap(5, testing::randomMapGeometry(), -2, -2, 4, 4, 0.35);

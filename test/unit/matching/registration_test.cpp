@@ -76,6 +76,72 @@ TEST_F(RegistrationTest, RecoversFiftySeededPoses) {
               worst_yaw * 180.0 / M_PI);
 }
 
+TEST_F(RegistrationTest, OnAnyThreadCountTheSameResultBitForBit) {
+  // Every stage on a pool (per-heading rotation, search, refinement, covariance, certificate,
+  // labels) gives the one-thread result exactly, from tracking and wide windows.
+  std::mt19937 rng(77);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  RegistrationOptions options;
+  const Registration one(options);
+  ASSERT_EQ(one.pool(), nullptr);
+  options.threads = 2;
+  const Registration two(options);
+  options.threads = 3;
+  const Registration three(options);
+  ASSERT_EQ(three.pool()->threads(), 3);
+  for (int c = 0; c < 6; ++c) {
+    const Pose6 truth = world_->streetPose(rng);
+    // Dense: the labels run in several blocks of points.
+    const PointList scan = world_->scan(truth, 35.0, 0.1, 0.0, 300 + c);
+    ASSERT_GE(scan.size(), 20000u);
+    MatchRequest req;
+    req.prior = truth;
+    req.prior.x += 1.5 * u(rng);
+    req.prior.y += 1.5 * u(rng);
+    req.prior.yaw += 0.04 * u(rng);
+    req.half_x_m = req.half_y_m = c % 2 ? 2.0 : 6.0;
+    req.half_heading_rad = c % 2 ? 0.0524 : 0.15;
+    const auto a = one.match(*chunks_, scan, req);
+    ASSERT_TRUE(a.ok()) << a.error();
+    for (const Registration* reg : {&two, &three}) {
+      const auto b = reg->match(*chunks_, scan, req);
+      ASSERT_TRUE(b.ok()) << b.error();
+      EXPECT_EQ(a->search.heading_index, b->search.heading_index) << "case " << c;
+      EXPECT_EQ(a->search.tx, b->search.tx) << "case " << c;
+      EXPECT_EQ(a->search.ty, b->search.ty) << "case " << c;
+      EXPECT_EQ(a->search.score, b->search.score) << "case " << c;
+      EXPECT_EQ(a->pose.x, b->pose.x) << "case " << c;
+      EXPECT_EQ(a->pose.y, b->pose.y) << "case " << c;
+      EXPECT_EQ(a->pose.z, b->pose.z) << "case " << c;
+      EXPECT_EQ(a->pose.roll, b->pose.roll) << "case " << c;
+      EXPECT_EQ(a->pose.pitch, b->pose.pitch) << "case " << c;
+      EXPECT_EQ(a->pose.yaw, b->pose.yaw) << "case " << c;
+      EXPECT_EQ(a->refinement.score, b->refinement.score) << "case " << c;
+      EXPECT_EQ(a->refinement.evaluations, b->refinement.evaluations) << "case " << c;
+      EXPECT_TRUE(a->covariance_xyh == b->covariance_xyh) << "case " << c;
+      EXPECT_EQ(a->certificate.certified, b->certificate.certified) << "case " << c;
+      EXPECT_EQ(a->certificate.evaluations, b->certificate.evaluations) << "case " << c;
+      EXPECT_EQ(a->certificate.protection_xy_m, b->certificate.protection_xy_m) << "case " << c;
+      EXPECT_EQ(a->certificate.separation_per_point, b->certificate.separation_per_point);
+      EXPECT_EQ(a->filtered.points.size(), b->filtered.points.size()) << "case " << c;
+      EXPECT_EQ(a->filtered.voxels.size(), b->filtered.voxels.size()) << "case " << c;
+      EXPECT_EQ(a->obstacles.obstacles, b->obstacles.obstacles) << "case " << c;
+      EXPECT_EQ(a->obstacles.label, b->obstacles.label) << "case " << c;
+      EXPECT_EQ(a->log_likelihood_per_point, b->log_likelihood_per_point) << "case " << c;
+    }
+  }
+}
+
+TEST(RegistrationOptionsThreads, OutOfRangeIsRejectedWithTheRange) {
+  RegistrationOptions o;
+  o.threads = -1;
+  EXPECT_NE(o.validate().find("threads"), std::string::npos);
+  o.threads = TaskPool::kMaxThreads + 1;
+  EXPECT_NE(o.validate().find("threads"), std::string::npos);
+  o.threads = 0;
+  EXPECT_EQ(o.validate(), "");
+}
+
 TEST(RegistrationCovariance, LargerAlongACorridorThanAcrossIt) {
   const ChunkMap chunks = testing::corridorChunks();
   const PointList scan = testing::corridorScan();

@@ -98,7 +98,7 @@ class MatchProcessor {
  private:
   MatchProcessor(const RegistrationOptions& tracking, const RegistrationOptions& unknown_z,
                  const LocalizationPolicyOptions& policy)
-      : tracking_(tracking), unknown_z_(unknown_z), policy_(policy) {}
+      : tracking_(tracking), unknown_z_(unknown_z, tracking_.pool()), policy_(policy) {}
 
   Registration tracking_;   ///< prior height known
   Registration unknown_z_;  ///< wider height pre-alignment (planar initial pose)

@@ -11,6 +11,7 @@
 
 #include <Eigen/Geometry>
 
+#include "gmm_localization/core/common/task_pool.h"
 #include "gmm_localization/core/matching/scan_filter.h"
 #include "gmm_localization/core/matching/search_problem.h"
 #include "gmm_localization/core/raster/chunk_map.h"
@@ -26,8 +27,11 @@ class ExactScorer {
 
   /// Interpolated, floored log-likelihood of one map-frame point [nats].
   double pointLogLikelihood(const Eigen::Vector3d& p_map) const;
-  /// Sum over `base_points` (base_link frame) placed at `pose` [nats].
-  double score(const PointList& base_points, const Pose6& pose) const;
+  /// Sum over `base_points` (base_link frame) placed at `pose` [nats]: partial sums over
+  /// blocks of kBlockPoints points (in parallel on `pool` when given), added in block order, so
+  /// the sum is the same bit for bit with or without a pool and for any thread count.
+  double score(const PointList& base_points, const Pose6& pose, TaskPool* pool = nullptr) const;
+  static constexpr size_t kBlockPoints = 128;
   /// Floored log-likelihood of a point in the single cell containing it (no interpolation).
   double cellLogLikelihood(const Eigen::Vector3d& p_map) const;
 

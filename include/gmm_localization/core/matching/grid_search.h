@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "gmm_localization/core/common/task_pool.h"
 #include "gmm_localization/core/matching/search_problem.h"
 
 namespace gmm_localization {
@@ -57,9 +58,15 @@ struct BranchAndBoundOptions {
 
 SearchOutcome exhaustiveSearch(const SearchProblem& problem);
 
-/// Paper Algorithm 3. `traversal`, when given, receives every node scored.
+/// Paper Algorithm 3. `traversal`, when given, receives every node scored (one pass, no
+/// threads). With `pool`, the top layer's headings are scored in parallel and the best-first
+/// branching runs one pass per thread over an interleaved share of the headings, the passes
+/// sharing the best leaf score found for pruning: the optimum (heading, tx, ty, score) is the
+/// same as on one thread, bit for bit; the statistics (evaluations, queue peak) are the sums and
+/// maxima of the passes and may differ from one run to the next.
 SearchOutcome branchAndBoundSearch(const SearchProblem& problem,
                                    const BranchAndBoundOptions& options = {},
-                                   std::vector<TraversalNode>* traversal = nullptr);
+                                   std::vector<TraversalNode>* traversal = nullptr,
+                                   TaskPool* pool = nullptr);
 
 }  // namespace gmm_localization

@@ -44,8 +44,10 @@ struct HillClimbOutcome {
 
 /// Coordinate pattern search over (x, y, z, roll, pitch, yaw) maximising scorer.score(points,
 /// pose) within the box around `start`, coarse-to-fine (options.coarse_points). Deterministic;
-/// never returns a worse pose than start (scored on all points).
+/// never returns a worse pose than start (scored on all points). `pool`: each score's point
+/// blocks in parallel (the same result, bit for bit).
 HillClimbOutcome hillClimb(const ExactScorer& scorer, const PointList& base_points,
-                           const Pose6& start, const HillClimbOptions& options);
+                           const Pose6& start, const HillClimbOptions& options,
+                           TaskPool* pool = nullptr);
 
 }  // namespace gmm_localization

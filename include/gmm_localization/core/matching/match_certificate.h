@@ -82,7 +82,9 @@ struct MatchCertificate {
 };
 
 /// Certifies `optimum`, the exact optimum of `problem` (exhaustiveSearch/branchAndBoundSearch).
+/// `pool`: the next node's children are scored ahead, beside the current node's, and used when
+/// that node is popped next: the same certificate and evaluation count as without a pool.
 MatchCertificate certifyOptimum(const SearchProblem& problem, const SearchOutcome& optimum,
-                                const CertificateOptions& options);
+                                const CertificateOptions& options, TaskPool* pool = nullptr);
 
 }  // namespace gmm_localization

@@ -39,7 +39,8 @@ struct MatchCovariance {
   Eigen::Vector3d edge_mass = Eigen::Vector3d::Zero();       ///< per axis, share on the edge
 };
 
+/// `pool`: the neighbourhood's headings scored in parallel (the same result).
 MatchCovariance searchCovariance(const SearchProblem& problem, const SearchOutcome& optimum,
-                                 const CovarianceOptions& options);
+                                 const CovarianceOptions& options, TaskPool* pool = nullptr);
 
 }  // namespace gmm_localization

@@ -45,7 +45,9 @@ struct ObstacleLabels {
 /// options.max_range_m and every point of a pose that is not finite (or whose x, y lie beyond
 /// 1e7 m of the map origin, where cell indices lose meaning) are labelled kUnknown with
 /// distance +inf.
+/// `pool`: blocks of points in parallel (the same labels and counts).
 ObstacleLabels classifyObstacles(const ChunkMap& map, const PointList& base_points,
-                                 const Pose6& pose, const ObstacleOptions& options);
+                                 const Pose6& pose, const ObstacleOptions& options,
+                                 TaskPool* pool = nullptr);
 
 }  // namespace gmm_localization

@@ -6,11 +6,13 @@
 
 #include <functional>
 #include <limits>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "gmm_localization/core/common/result.h"
+#include "gmm_localization/core/common/task_pool.h"
 #include "gmm_localization/core/matching/global_search.h"
 #include "gmm_localization/core/matching/grid_search.h"
 #include "gmm_localization/core/matching/hill_climb.h"
@@ -42,6 +44,13 @@ struct RegistrationOptions {
   /// A match is rejected when less than this share of the search points lies over non-empty
   /// map cells at the result (the scan is mostly off the map).
   double min_map_coverage = 0.2;
+  /// Threads a match runs on, the caller's included (core/common/task_pool.h): the per-heading
+  /// rotation, the search's and the covariance's headings, the refinement's and the labels'
+  /// points, the certificate's next node in parallel (the scan filter stays on one thread); 0:
+  /// one per hardware thread.
+  /// The result is bit-identical for any count (the work is cut into pieces that do not depend
+  /// on it); only the search statistics may differ.
+  int threads = 1;
 
   std::string validate() const;
 };
@@ -130,8 +139,13 @@ class RegistrationResult : public Result<T> {
 
 class Registration {
  public:
-  explicit Registration(const RegistrationOptions& options) : options_(options) {}
+  /// Runs on `pool` when given (shared by several registrations), otherwise on a pool of its own
+  /// of options.threads threads (none for 1).
+  explicit Registration(const RegistrationOptions& options,
+                        std::shared_ptr<TaskPool> pool = nullptr);
   const RegistrationOptions& options() const { return options_; }
+  /// The pool the match runs on; null when it runs on the caller's thread alone.
+  const std::shared_ptr<TaskPool>& pool() const { return pool_; }
 
   /// Registers `base_points` (base_link frame [m]) against `map`. Fails with a reason and its
   /// kind, never with a pose, for: invalid options or request, no points after filtering, scan
@@ -162,6 +176,7 @@ class Registration {
 
  private:
   RegistrationOptions options_;
+  std::shared_ptr<TaskPool> pool_;
 };
 
 /// Height offset [m] (a multiple of the z step within +-range_m) that maximises the base-layer

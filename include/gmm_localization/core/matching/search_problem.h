@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "gmm_localization/core/common/result.h"
+#include "gmm_localization/core/common/task_pool.h"
 #include "gmm_localization/core/common/types.h"
 #include "gmm_localization/core/matching/scan_filter.h"
 #include "gmm_localization/core/raster/chunk_map.h"
@@ -97,8 +98,9 @@ class SearchProblem {
  public:
   /// `points` in the levelled base frame (see filterScan). Fails when the window is invalid,
   /// there are no points, or no point of any pose lands on a loaded chunk ("off the map").
+  /// `pool`: the headings in parallel (the same problem).
   static Result<SearchProblem> create(const ChunkMap& map, const PointList& points,
-                                      const SearchWindow& window);
+                                      const SearchWindow& window, TaskPool* pool = nullptr);
 
   const SearchWindow& window() const { return window_; }
   const ChunkMap& map() const { return *map_; }
