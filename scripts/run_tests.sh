@@ -22,10 +22,10 @@ catkin_test_results --verbose "$GMM_BUILD/test_results" | tail -n 40
 sanitizers_ok=true
 "$GMM_REPO/scripts/run_sanitizers.sh" || sanitizers_ok=false
 # The fuzz pass: libFuzzer targets of every parser of outside input, built with clang-14
-# (ASan+UBSan), the reproducers of test/fuzz/regressions replayed, then 5 s of fuzzing per
+# (ASan+UBSan), the reproducers of test/fuzz/regressions replayed, then 3 s of fuzzing per
 # target here (GMM_FUZZ_TIME; scripts/run_fuzz.sh alone: 20 s; docs/fuzzing.md). Its status
 # counts like the sanitizers'.
 fuzz_ok=true
-GMM_FUZZ_TIME="${GMM_FUZZ_TIME:-5}" "$GMM_REPO/scripts/run_fuzz.sh" || fuzz_ok=false
+GMM_FUZZ_TIME="${GMM_FUZZ_TIME:-3}" "$GMM_REPO/scripts/run_fuzz.sh" || fuzz_ok=false
 catkin_test_results "$GMM_BUILD/test_results" >/dev/null
 $sanitizers_ok && $fuzz_ok

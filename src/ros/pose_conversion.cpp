@@ -42,14 +42,14 @@ Eigen::Isometry3d fromMsg(const geometry_msgs::Transform& t) {
 }
 
 void toMsg(const Eigen::Isometry3d& T, geometry_msgs::Transform& msg) {
-  const geometry_msgs::Pose p = toMsg(T);
+  const geometry_msgs::Pose p = node::toMsg(T);
   msg.translation.x = p.position.x;
   msg.translation.y = p.position.y;
   msg.translation.z = p.position.z;
   msg.rotation = p.orientation;
 }
 
-geometry_msgs::Pose toMsg(const Pose6& p) { return toMsg(toIsometry(p)); }
+geometry_msgs::Pose toMsg(const Pose6& p) { return node::toMsg(toIsometry(p)); }
 
 bool isFinite(const geometry_msgs::Pose& p) {
   const double q2 = p.orientation.x * p.orientation.x + p.orientation.y * p.orientation.y +

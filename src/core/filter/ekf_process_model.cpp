@@ -3,14 +3,10 @@
 #include <algorithm>
 #include <cmath>
 
+#include "gmm_localization/core/common/types.h"
+
 namespace gmm_localization {
 namespace {
-
-Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d s;
-  s << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
-  return s;
-}
 
 // cos(pitch) kept away from zero so the Euler-rate map E stays finite (ekf_state.h).
 double safeCos(double pitch) {
@@ -50,9 +46,10 @@ StateVector predictStep(const StateVector& x, double dt, StateCovariance* jacobi
     f.setIdentity();
     // Position w.r.t. the Euler angles: dR/droll = Rz Ry Rx [e1]x, dR/dpitch = Rz Ry [e2]x Rx,
     // dR/dyaw = [e3]x R.
-    f.block<3, 1>(kStateX, kStateRoll) = rz * ry * rx * skew(Eigen::Vector3d::UnitX()) * d;
-    f.block<3, 1>(kStateX, kStatePitch) = rz * ry * skew(Eigen::Vector3d::UnitY()) * rx * d;
-    f.block<3, 1>(kStateX, kStateYaw) = skew(Eigen::Vector3d::UnitZ()) * r * d;
+    f.block<3, 1>(kStateX, kStateRoll) = rz * ry * rx * skewSymmetric(Eigen::Vector3d::UnitX()) * d;
+    f.block<3, 1>(kStateX, kStatePitch) =
+        rz * ry * skewSymmetric(Eigen::Vector3d::UnitY()) * rx * d;
+    f.block<3, 1>(kStateX, kStateYaw) = skewSymmetric(Eigen::Vector3d::UnitZ()) * r * d;
     f.block<3, 3>(kStateX, kStateVx) = r * dt;
     f.block<3, 3>(kStateX, kStateAx) = 0.5 * dt * dt * r;
     // Euler angles w.r.t. roll and pitch (through E) and the body rates.
@@ -65,8 +62,8 @@ StateVector predictStep(const StateVector& x, double dt, StateCovariance* jacobi
     f(kStateYaw, kStatePitch) += dt * q * sp / (cp * cp);
     f.block<3, 3>(kStateRoll, kStateWx) = e * dt;
     // Body velocity: v' = v + (a - w x v) dt, and w x v = -v x w.
-    f.block<3, 3>(kStateVx, kStateVx) -= skew(w) * dt;
-    f.block<3, 3>(kStateVx, kStateWx) = skew(v) * dt;
+    f.block<3, 3>(kStateVx, kStateVx) -= skewSymmetric(w) * dt;
+    f.block<3, 3>(kStateVx, kStateWx) = skewSymmetric(v) * dt;
     f.block<3, 3>(kStateVx, kStateAx) = Eigen::Matrix3d::Identity() * dt;
   }
   return out;

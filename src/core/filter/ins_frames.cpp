@@ -3,14 +3,10 @@
 #include <algorithm>
 #include <cmath>
 
+#include "gmm_localization/core/common/types.h"
+
 namespace gmm_localization {
 namespace {
-
-Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
-  return m;
-}
 
 /// A covariance block the driver left unknown: no positive variance on its diagonal.
 bool blockUnknown(const Eigen::Matrix3d& block) { return !(block.diagonal().array() > 0.0).any(); }
@@ -138,7 +134,7 @@ Matrix6d twistTransform(const Eigen::Isometry3d& b_T_c) {
   const Eigen::Matrix3d R = b_T_c.linear();
   Matrix6d ad = Matrix6d::Zero();
   ad.topLeftCorner<3, 3>() = R;
-  ad.topRightCorner<3, 3>() = skew(b_T_c.translation()) * R;
+  ad.topRightCorner<3, 3>() = skewSymmetric(b_T_c.translation()) * R;
   ad.bottomRightCorner<3, 3>() = R;
   return ad;
 }
@@ -229,7 +225,7 @@ Eigen::Isometry3d integrateBodyTwist(const Eigen::Isometry3d& T, const Vector6d&
   const Eigen::Vector3d rho = twist.head<3>() * dt;
   const Eigen::Vector3d phi = twist.tail<3>() * dt;
   const double theta = phi.norm();
-  const Eigen::Matrix3d W = skew(phi);
+  const Eigen::Matrix3d W = skewSymmetric(phi);
   Eigen::Matrix3d V;
   Eigen::Matrix3d R;
   if (theta < 1e-6) {

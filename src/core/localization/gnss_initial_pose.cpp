@@ -11,7 +11,7 @@ namespace {
 
 bool positive(double v) { return std::isfinite(v) && v > 0.0; }
 
-double wrapAngle(double a) { return std::atan2(std::sin(a), std::cos(a)); }
+double wrapToPi(double a) { return std::atan2(std::sin(a), std::cos(a)); }
 
 std::string format(const char* fmt, double a, double b) {
   char s[200];
@@ -96,7 +96,7 @@ Result<GnssPoseEstimate> GnssInitialPose::addFix(const Georeference& geo, const 
   e.stamp_s = fix.stamp_s;
   double yaw_sigma = 0.0;
   if (have_heading_ && std::abs(fix.stamp_s - heading_.stamp_s) <= o.max_heading_age_s) {
-    e.yaw_rad = wrapAngle(heading_.enu_yaw_rad + g);
+    e.yaw_rad = wrapToPi(heading_.enu_yaw_rad + g);
     yaw_sigma = std::isnan(heading_.sigma_rad) || heading_.sigma_rad <= 0.0
                     ? o.default_heading_sigma_rad
                     : heading_.sigma_rad;

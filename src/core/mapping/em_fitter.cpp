@@ -16,7 +16,7 @@ using em_detail::sortPrefix;
 
 // Heights beyond this are not physical map data; such samples are ignored so that squared
 // deviations can never overflow.
-constexpr double kMaxAbsHeightM = 1.0e9;
+constexpr double kMaxAbsSampleHeightM = 1.0e9;
 
 std::string fieldError(const char* name, double value, const char* range) {
   std::ostringstream s;
@@ -68,7 +68,7 @@ bool EmFitter::prepare(const WeightedSample* samples, size_t count, EmFitResult&
   double w_max = 0.0;
   for (size_t i = 0; i < count; ++i) {
     const WeightedSample& s = samples[i];
-    if (!std::isfinite(s.z_m) || std::abs(s.z_m) > kMaxAbsHeightM) continue;
+    if (!std::isfinite(s.z_m) || std::abs(s.z_m) > kMaxAbsSampleHeightM) continue;
     if (!std::isfinite(s.weight) || !(s.weight > 0.0)) continue;
     w_max = std::max(w_max, s.weight);
   }
@@ -81,7 +81,7 @@ bool EmFitter::prepare(const WeightedSample* samples, size_t count, EmFitResult&
   double sum_w = 0.0, sum_wsq = 0.0;
   for (size_t i = 0; i < count; ++i) {
     const WeightedSample& s = samples[i];
-    if (!std::isfinite(s.z_m) || std::abs(s.z_m) > kMaxAbsHeightM) continue;
+    if (!std::isfinite(s.z_m) || std::abs(s.z_m) > kMaxAbsSampleHeightM) continue;
     if (!std::isfinite(s.weight) || !(s.weight > 0.0)) continue;
     const double w = s.weight / w_max;
     // A consistent weight_sq lies in (0, weight^2]; anything else is treated as one observation.

@@ -22,7 +22,7 @@ namespace fs = std::filesystem;
 using map_builder::SpillRecord;
 
 constexpr double kMaxHorizontalM = 1e7;
-constexpr double kMaxAbsHeightM = 1e6;
+constexpr double kMaxAbsInputHeightM = 1e6;
 
 std::string fieldError(const char* name, double value, const std::string& range) {
   std::ostringstream s;
@@ -270,7 +270,8 @@ Status MapBuilder::Impl::addBatch(const PointBatch& batch) {
     const double x = pf.x(), y = pf.y(), z = pf.z();
     if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z) ||
         std::abs(x - o.geometry.origin_x_m) > kMaxHorizontalM ||
-        std::abs(y - o.geometry.origin_y_m) > kMaxHorizontalM || std::abs(z) > kMaxAbsHeightM) {
+        std::abs(y - o.geometry.origin_y_m) > kMaxHorizontalM ||
+        std::abs(z) > kMaxAbsInputHeightM) {
       ++st.dropped_invalid;
       continue;
     }

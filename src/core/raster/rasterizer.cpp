@@ -12,7 +12,7 @@ namespace {
 
 constexpr double kHalfLog2Pi = 0.91893853320467274178;
 // Heights beyond this are treated as corrupt input and ignored when sizing a chunk's z range.
-constexpr double kMaxAbsHeightM = 1.0e4;
+constexpr double kMaxAbsRasterHeightM = 1.0e4;
 
 int32_t floorBin(double z, double step) { return static_cast<int32_t>(std::floor(z / step)); }
 
@@ -38,8 +38,8 @@ ChunkInput gatherInput(const GmmMap& map, const CellRect& read, double z_step, d
       const auto range = aboveFloorRange(*g, ll_floor);
       if (!(range.first <= range.second)) continue;
       in.mixture[static_cast<size_t>(ey) * in.extent + ex] = g;
-      z_min = std::min(z_min, std::max(range.first, -kMaxAbsHeightM));
-      z_max = std::max(z_max, std::min(range.second, kMaxAbsHeightM));
+      z_min = std::min(z_min, std::max(range.first, -kMaxAbsRasterHeightM));
+      z_max = std::max(z_max, std::min(range.second, kMaxAbsRasterHeightM));
     }
   }
   if (z_min <= z_max) {
@@ -155,9 +155,10 @@ void rasterizeCell(const GaussianMixture1D& g, int32_t zb_lo, int32_t nz, double
   if (g.empty() || nz <= 0) return;
   const auto range = aboveFloorRange(g, quantizer.floor());
   if (!(range.first <= range.second)) return;
-  const int32_t b0 = std::max(zb_lo, floorBin(std::max(range.first, -kMaxAbsHeightM), z_step_m));
+  const int32_t b0 =
+      std::max(zb_lo, floorBin(std::max(range.first, -kMaxAbsRasterHeightM), z_step_m));
   const int32_t b1 =
-      std::min(zb_lo + nz - 1, floorBin(std::min(range.second, kMaxAbsHeightM), z_step_m));
+      std::min(zb_lo + nz - 1, floorBin(std::min(range.second, kMaxAbsRasterHeightM), z_step_m));
   if (b0 > b1) return;
   const std::vector<double> modes = g.modes();
   const PreparedMixture terms(g);  // the same function without a log per call

@@ -26,7 +26,7 @@ constexpr uint64_t kMaxDataBytes = uint64_t{1} << 50;
 constexpr uint64_t kMaxLzfRatio = 88;
 
 /// A token for an error message: at most 40 characters, control bytes shown as '?'.
-std::string quoted(const std::string& s) {
+std::string quotedText(const std::string& s) {
   std::string q = s.substr(0, 40);
   for (char& c : q)
     if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7f) c = '?';
@@ -184,7 +184,7 @@ Result<PcdHeader> parsePcdHeader(const std::string& text) {
     for (const char* k : kKnown) known = known || key == k;
     if (!known) {
       return R::failure("header line " + std::to_string(line_no) + ": unknown keyword " +
-                        quoted(t[0]) + " (a garbled header, or not a PCD file)");
+                        quotedText(t[0]) + " (a garbled header, or not a PCD file)");
     }
     if (values.count(key)) {
       return R::failure("header line " + std::to_string(line_no) + ": " + key +
@@ -213,7 +213,7 @@ Result<PcdHeader> parsePcdHeader(const std::string& text) {
   else if (kind == "binary_compressed")
     h.data = PcdData::kBinaryCompressed;
   else
-    return R::failure(at("DATA") + ": DATA " + quoted(kind) +
+    return R::failure(at("DATA") + ": DATA " + quotedText(kind) +
                       " is not ascii, binary or binary_compressed");
   if (values.count("VERSION")) {
     const auto& v = args("VERSION");
@@ -222,7 +222,7 @@ Result<PcdHeader> parsePcdHeader(const std::string& text) {
     bool known = false;
     for (const char* k : kVersions) known = known || (ok && v[0] == k);
     if (!known) {
-      return R::failure(at("VERSION") + ": VERSION " + (v.empty() ? "''" : quoted(v[0])) +
+      return R::failure(at("VERSION") + ": VERSION " + (v.empty() ? "''" : quotedText(v[0])) +
                         " is not 0.5, 0.6 or 0.7");
     }
     h.version = v[0];
@@ -251,21 +251,21 @@ Result<PcdHeader> parsePcdHeader(const std::string& text) {
     uint64_t size = 0, count = 1;
     if (!parseUnsigned(args("SIZE")[i], 8, size) ||
         (size != 1 && size != 2 && size != 4 && size != 8)) {
-      return R::failure(at("SIZE") + ": SIZE " + quoted(args("SIZE")[i]) + " of field " +
-                        quoted(f.name) + " is not 1, 2, 4 or 8");
+      return R::failure(at("SIZE") + ": SIZE " + quotedText(args("SIZE")[i]) + " of field " +
+                        quotedText(f.name) + " is not 1, 2, 4 or 8");
     }
     const std::string& type = args("TYPE")[i];
     if (type != "F" && type != "I" && type != "U") {
-      return R::failure(at("TYPE") + ": TYPE " + quoted(type) + " of field " + quoted(f.name) +
-                        " is not F, I or U");
+      return R::failure(at("TYPE") + ": TYPE " + quotedText(type) + " of field " +
+                        quotedText(f.name) + " is not F, I or U");
     }
     if (type == "F" && size != 4 && size != 8) {
-      return R::failure(at("TYPE") + ": field " + quoted(f.name) + " is F" + std::to_string(size) +
-                        " (floats are F4 or F8)");
+      return R::failure(at("TYPE") + ": field " + quotedText(f.name) + " is F" +
+                        std::to_string(size) + " (floats are F4 or F8)");
     }
     if (values.count("COUNT") && (!parseUnsigned(args("COUNT")[i], kMaxCount, count) || !count)) {
-      return R::failure(at("COUNT") + ": COUNT " + quoted(args("COUNT")[i]) + " of field " +
-                        quoted(f.name) + " is not in [1, " + std::to_string(kMaxCount) + "]");
+      return R::failure(at("COUNT") + ": COUNT " + quotedText(args("COUNT")[i]) + " of field " +
+                        quotedText(f.name) + " is not in [1, " + std::to_string(kMaxCount) + "]");
     }
     f.size = static_cast<int>(size);
     f.type = type[0];
@@ -307,7 +307,7 @@ Result<PcdHeader> parsePcdHeader(const std::string& text) {
   auto dimension = [&](const char* key, uint64_t& out) -> std::string {
     if (!values.count(key)) return "";
     if (args(key).size() != 1 || !parseUnsigned(args(key)[0], kMaxDimension, out)) {
-      return at(key) + ": " + key + " " + (args(key).empty() ? "''" : quoted(args(key)[0])) +
+      return at(key) + ": " + key + " " + (args(key).empty() ? "''" : quotedText(args(key)[0])) +
              " is not a count in [0, 2^40]";
     }
     return "";
@@ -515,7 +515,7 @@ Result<size_t> PcdFileReader::readAscii(size_t n, std::vector<Eigen::Vector3d>& 
         char* w = p;
         while (w < end && !std::isspace(static_cast<unsigned char>(*w))) ++w;
         return R::failure(fail("line " + std::to_string(ascii_line_) + ": " +
-                               quoted(std::string(p, w)) + " is not a number"));
+                               quotedText(std::string(p, w)) + " is not a number"));
       }
       for (int k = 0; k < 3; ++k)
         if (t == token_[k]) v[k] = d;

@@ -66,6 +66,9 @@ Result<BagReadStats> visitLocalizationBag(const std::string& path, const BagTopi
 /// The ground-truth trajectory alone (map -> base_frame), from a nav_msgs/Odometry topic.
 Result<Trajectory> readTrajectory(const std::string& path, const std::string& topic);
 
+/// The longest gap [s] of the ground truth (100 Hz) that Trajectory::at bridges for the scores.
+constexpr double kTruthGapS = 0.1;
+
 /// Number of messages on a topic (0 when the bag cannot be read).
 size_t countMessages(const std::string& path, const std::string& topic);
 

@@ -18,8 +18,6 @@ namespace gmm_localization {
 namespace eval {
 namespace {
 
-constexpr double kTruthGapS = 0.1;  // ground truth is 100 Hz; never bridge a longer gap
-
 double steadySeconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }

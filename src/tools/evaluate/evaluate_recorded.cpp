@@ -15,8 +15,6 @@ namespace gmm_localization {
 namespace eval {
 namespace {
 
-constexpr double kTruthGapS = 0.1;
-
 PoseStamped2 planarFromPose(const geometry_msgs::Pose& pose, double t) {
   const auto& q = pose.orientation;
   PoseStamped2 p;

@@ -32,6 +32,13 @@ Pose6 fromIsometry(const Eigen::Isometry3d& T);
 /// The (x, y, yaw) block of a 6 x 6 pose covariance (rows and columns 0, 1 and 5): the planar
 /// covariance the search and the prior tracker work with.
 Eigen::Matrix3d planarCovariance(const Matrix6d& pose_covariance);
+
+/// The cross-product matrix [v]x: skewSymmetric(v) * w == v.cross(w).
+inline Eigen::Matrix3d skewSymmetric(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d m;
+  m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
+  return m;
+}
 /// A 6 x 6 pose covariance holding `planar` in its (x, y, yaw) block and zeros elsewhere.
 Matrix6d poseCovarianceFromPlanar(const Eigen::Matrix3d& planar);
 
