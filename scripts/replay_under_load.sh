@@ -7,7 +7,9 @@
 #   scans in the bag, answered (a MatchStatus), counted as dropped (dropped_scans), neither,
 #   accepted, latency stamp -> pose (median, p95), processing per scan (median, p95).
 # Usage: scripts/replay_under_load.sh [DATASET] [RATE...]   (defaults: downtown 1 2 4)
-# Needs the demo's bag and map (./scripts/demo.sh writes them to .ws/demo).
+# Needs the demo's bag and map (./scripts/demo.sh writes them to .ws/demo). GMM_LOAD_WORKERS=0
+# replays on a quiet machine; GMM_REPLAY_ARGS adds replay.launch arguments (e.g.
+# "config_dir:=DIR" for a matcher.yaml with registration/threads: 1).
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/env.sh"
 gmm_source_ros
@@ -50,7 +52,8 @@ for rate in "${RATES[@]}"; do
   ROS_MASTER_URI="http://localhost:$port" ROS_LOG_DIR="$OUT/ros_logs" \
     timeout --signal=INT --kill-after=20 $((duration + 180)) \
     roslaunch -p "$port" --screen gmm_localization replay.launch bag:="$BAG" map:="$DEMO/map" \
-    rate:="$rate" record:="$rec" use_initial_pose:=true $args >"$OUT/${DATASET}_x${rate}.log" 2>&1 ||
+    rate:="$rate" record:="$rec" use_initial_pose:=true $args ${GMM_REPLAY_ARGS:-} \
+    >"$OUT/${DATASET}_x${rate}.log" 2>&1 ||
     true
   load_after=$(cut -d' ' -f1 /proc/loadavg)
   stop_load
@@ -84,7 +87,7 @@ EOF
 done
 
 echo
-echo "Replays of $DATASET under load ($WORKERS busy loops; $(nproc) cores; $(date -u +%F), $(git -C "$GMM_REPO" rev-parse --short HEAD)):"
+echo "Replays of $DATASET under load ($WORKERS busy loops; $(nproc) cores; $(date -u +%F), $(git -C "$GMM_REPO" rev-parse --short HEAD)${GMM_REPLAY_ARGS:+; $GMM_REPLAY_ARGS}):"
 echo
 echo "| rate | load (1 min, start-end) | scans | answered | dropped (counted) | neither | accepted | latency stamp->pose median / p95 [ms] | processing median / p95 [ms] |"
 echo "|---|---|---|---|---|---|---|---|---|"

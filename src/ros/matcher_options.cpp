@@ -71,7 +71,7 @@ RegistrationOptions loadRegistrationOptions(const ParamSource& parent) {
   o.obstacles.mahalanobis_threshold =
       param(nh, "obstacles/mahalanobis_threshold", o.obstacles.mahalanobis_threshold, 0.0, 1000.0);
   o.min_map_coverage = param(nh, "min_map_coverage", o.min_map_coverage, 0.0, 1.0);
-  o.threads = param(nh, "threads", 0, 0, TaskPool::kMaxThreads);
+  o.threads = param(nh, "threads", o.threads, 0, TaskPool::kMaxThreads);
   requireValid("registration options", o.validate());
   return o;
 }

@@ -62,27 +62,6 @@ ros::Time last_sent;
 
 double wallNow() { return ros::WallTime::now().toSec(); }
 
-/// topic -> nodes publishing it, and topic -> nodes subscribing to it (master getSystemState).
-struct TopicGraph {
-  std::map<std::string, std::set<std::string>> publishers, subscribers;
-};
-
-bool readTopicGraph(TopicGraph* g) {
-  XmlRpc::XmlRpcValue request, response, payload;
-  request[0] = ros::this_node::getName();
-  if (!ros::master::execute("getSystemState", request, response, payload, true)) return false;
-  for (int kind = 0; kind < 2; ++kind) {
-    auto& out = kind == 0 ? g->publishers : g->subscribers;
-    for (int i = 0; i < payload[kind].size(); ++i) {
-      const std::string topic = payload[kind][i][0];
-      for (int j = 0; j < payload[kind][i][1].size(); ++j) {
-        out[topic].insert(static_cast<std::string>(payload[kind][i][1][j]));
-      }
-    }
-  }
-  return true;
-}
-
 std::string bare(const std::string& frame) {
   return !frame.empty() && frame[0] == '/' ? frame.substr(1) : frame;
 }
@@ -180,12 +159,12 @@ TEST(VehicleExternalFilter, TheNodeletsAndTopicsAreWired) {
                (noEkf() || loaded.count("/localization/ekf"));
       },
       30.0));
-  TopicGraph g;
+  Graph g;
   const std::string prior = noEkf() ? "/odometry/filtered" : "/localization/odometry";
   ASSERT_TRUE(waitFor(
       [&] {
-        g = TopicGraph();
-        return readTopicGraph(&g) && g.subscribers[prior].count(kManager) == 1 &&
+        g = Graph();
+        return readGraph(&g) && g.subscribers[prior].count(kManager) == 1 &&
                g.publishers["/localization/pose"].count(kManager) == 1;
       },
       30.0))

@@ -260,27 +260,6 @@ void onTf(const ros::MessageEvent<const tf2_msgs::TFMessage>& event) {
   }
 }
 
-/// topic -> nodes publishing / subscribing to it (master getSystemState).
-struct TopicGraph {
-  std::map<std::string, std::set<std::string>> publishers, subscribers;
-};
-
-bool readTopicGraph(TopicGraph* g) {
-  XmlRpc::XmlRpcValue request, response, payload;
-  request[0] = ros::this_node::getName();
-  if (!ros::master::execute("getSystemState", request, response, payload, true)) return false;
-  for (int kind = 0; kind < 2; ++kind) {
-    auto& out = kind == 0 ? g->publishers : g->subscribers;
-    for (int i = 0; i < payload[kind].size(); ++i) {
-      const std::string topic = payload[kind][i][0];
-      for (int j = 0; j < payload[kind][i][1].size(); ++j) {
-        out[topic].insert(static_cast<std::string>(payload[kind][i][1][j]));
-      }
-    }
-  }
-  return true;
-}
-
 TEST(VehicleInsAdapter, TheAdapterFeedsTheMatcherAndTheEkf) {
   ASSERT_TRUE(ros::service::waitForService(std::string(kManager) + "/list", 30000));
   nodelet::NodeletList list;
@@ -295,11 +274,11 @@ TEST(VehicleInsAdapter, TheAdapterFeedsTheMatcherAndTheEkf) {
       },
       30.0))
       << "nodelets loaded: " << loaded.size();
-  TopicGraph g;
+  Graph g;
   ASSERT_TRUE(waitFor(
       [&] {
-        g = TopicGraph();
-        return readTopicGraph(&g) && g.subscribers[driver_topic].count(kManager) == 1 &&
+        g = Graph();
+        return readGraph(&g) && g.subscribers[driver_topic].count(kManager) == 1 &&
                g.publishers["/localization/ins_odom"].count(kManager) == 1 &&
                g.subscribers["/localization/ins_odom"].count(kManager) == 1;
       },

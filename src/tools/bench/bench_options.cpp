@@ -73,7 +73,9 @@ const char* benchUsage() {
          "  --global-root-headings L  root heading intervals of 2^L headings (default)\n"
          "  --global-split-share S    heading-vs-translation split rule (default)\n"
          "  --no-global          skip the global-localization table\n"
-         "  --no-sizes           skip the scan-size table\n";
+         "  --no-sizes           skip the scan-size table\n"
+         "  --no-memory-floor    skip measuring memory latency and bandwidth (256 MB, about 2 s)\n"
+         "                       and the search-against-memory table\n";
 }
 
 namespace {
@@ -182,8 +184,8 @@ bool parseBenchOptions(int argc, char** argv, BenchOptions& o, bool& help) {
       help = true;
       return false;
     }
-    if (a == "--no-sizes" || a == "--no-global") {
-      (a == "--no-sizes" ? o.sizes : o.global) = false;
+    if (a == "--no-sizes" || a == "--no-global" || a == "--no-memory-floor") {
+      (a == "--no-sizes" ? o.sizes : a == "--no-global" ? o.global : o.memory_floor) = false;
       continue;
     }
     const auto handler = with_value.find(a);

@@ -28,6 +28,7 @@ struct BenchOptions {
   double raster_radius_m = 110.0;
   bool sizes = true;
   bool global = true;
+  bool memory_floor = true;  ///< --no-memory-floor: skip the memory latency and bandwidth
   int global_count = 10;
   std::vector<double> global_regions_m = {25.0, 50.0, 100.0};
   RegistrationOptions reg;

@@ -327,6 +327,60 @@ double machineCeiling(int threads) {
   return median(ratios);
 }
 
+/// This machine's memory, measured now: the latency of a dependent random read in a buffer far
+/// larger than the caches (a pointer chase over 256 MB) and the bandwidth of a sequential read
+/// of it, medians of three tries.
+struct MemoryFloor {
+  double random_read_ns = 0.0;
+  double bandwidth_gb_s = 0.0;
+};
+
+MemoryFloor measureMemory() {
+  const size_t n = size_t{32} << 20;  // 32 M entries of 8 bytes: 256 MB
+  std::vector<uint64_t> next(n);
+  // One random cycle through every entry (Sattolo's shuffle), so each read depends on the last.
+  for (size_t i = 0; i < n; ++i) next[i] = i;
+  std::mt19937_64 rng(5);
+  for (size_t i = n - 1; i > 0; --i) std::swap(next[i], next[rng() % i]);
+  std::vector<double> lat, bw;
+  for (int k = 0; k < 3; ++k) {
+    const size_t steps = 4000000;
+    uint64_t at = 0;
+    const double t0 = now();
+    for (size_t i = 0; i < steps; ++i) at = next[at];
+    const double t1 = now();
+    lat.push_back((t1 - t0) / steps * 1e9 + static_cast<double>(at % 2) * 1e-12);
+    uint64_t sum = 0;
+    const double t2 = now();
+    for (size_t i = 0; i < n; ++i) sum += next[i];
+    const double t3 = now();
+    bw.push_back(static_cast<double>(n * sizeof(uint64_t)) / (t3 - t2) / 1e9 +
+                 static_cast<double>(sum % 2) * 1e-12);
+  }
+  return {median(lat), median(bw)};
+}
+
+/// Each window's search against the memory floor: the table lookups it made at the measured
+/// random-read latency (every lookup a miss: an upper bound of what memory costs it), and the
+/// cache lines those lookups touch at the measured bandwidth (the bytes-read floor).
+void printFloor(Report& out, const std::vector<WindowRow>& rows, const MemoryFloor& m) {
+  out.print(
+      "\nMemory, measured now: %.1f ns per dependent random read (256 MB pointer chase), %.1f "
+      "GB/s sequential read.\n\n",
+      m.random_read_ns, m.bandwidth_gb_s);
+  out.print(
+      "| window | search ms (median) | table lookups (median) | all lookups missing the caches, "
+      "ms | their 64-byte lines at the bandwidth, ms | search time per lookup, ns |\n");
+  out.print("|---|---|---|---|---|---|\n");
+  for (const WindowRow& r : rows) {
+    const double lookups = median(r.lookups);
+    out.print("| %s | %.1f | %.2f M | %.1f | %.1f | %.1f |\n", r.name.c_str(), median(r.search_ms),
+              lookups / 1e6, lookups * m.random_read_ns * 1e-6,
+              lookups * 64.0 / (m.bandwidth_gb_s * 1e9) * 1e3,
+              median(r.search_ms) * 1e6 / std::max(1.0, lookups));
+  }
+}
+
 /// Median of the per-scan ratios a / b (scans where both ran).
 double medianRatio(const std::vector<double>& a, const std::vector<double>& b) {
   std::vector<double> r;
@@ -517,6 +571,11 @@ int main(int argc, char** argv) {
       "within %g m, +-%g deg (--track-offset-m, --track-offset-deg).\n\n",
       o.offset_m, o.offset_deg, o.track_offset_m, o.track_offset_deg);
   printWindows(out, rows);
+  if (o.memory_floor) {
+    const MemoryFloor floor = measureMemory();
+    printFloor(out, rows, floor);
+    summary.add("random_read_ns", floor.random_read_ns).add("bandwidth_gb_s", floor.bandwidth_gb_s);
+  }
   summary.add("windows", std::vector<JsonObject>{
                              windowJson(rows[0], 12.5, 15.0, o.offset_m, o.offset_deg),
                              windowJson(rows[1], 2.0, 3.0, o.track_offset_m, o.track_offset_deg)});
@@ -677,65 +736,82 @@ int main(int argc, char** argv) {
   }
 
   if (with_peers) {
-    out.print("\n## Peers from the same offsets (within %g m, %g deg)\n\n", o.offset_m,
-              o.offset_deg);
+    // From the paper window's offsets (10 m) and from the tracking window's (1.5 m): what a user
+    // gives up or gains against the matchers they know, at both distances.
+    out.print("\n## Peers from the same offsets as our windows\n\n");
     out.print(
         "Target clouds: %s (--peer-target-stride, --peer-target-exclude, "
         "--peer-target-radius).\n\n",
         describe(o.peer_target).c_str());
-    out.print("| matcher | scans | success <0.5 m, <1 deg | time per match ms median / p99 |\n");
-    out.print("|---|---|---|---|\n");
+    out.print(
+        "| matcher | offsets | scans | success <0.5 m, <1 deg | time per match ms median / p99 "
+        "|\n");
+    out.print("|---|---|---|---|---|\n");
     PeerOptions po;
     std::vector<JsonObject> peer_json;
-    for (auto kind : {PeerMatcher::Kind::kNdt, PeerMatcher::Kind::kGicp}) {
-      PeerMatcher peer(kind, po);
-      std::mt19937 rng(o.seed);  // the same offsets as the paper window above
-      int ok = 0, n = 0;
-      std::vector<double> ms;
-      for (size_t i = 0; i < scans->size() && n < o.peer_count; ++i) {
-        const BenchScan& s = scans.value()[i];
-        const Pose6 prior = offsetPrior(s.truth, o.offset_m, o.offset_deg * M_PI / 180.0, rng);
-        auto target = targetCloud(mapping, s.truth.translation(), s.index, o.peer_target);
-        if (!target.ok()) {
-          std::fprintf(stderr, "%s\n", target.error().c_str());
-          continue;
+    struct Offsets {
+      double m, deg;
+      const WindowRow& ours;
+      const char* window;
+    };
+    for (const Offsets& off :
+         {Offsets{o.offset_m, o.offset_deg, rows[0], "paper window"},
+          Offsets{o.track_offset_m, o.track_offset_deg, rows[1], "tracking window"}}) {
+      const std::string offsets = fmt("within %g m, %g deg", off.m, off.deg);
+      for (auto kind : {PeerMatcher::Kind::kNdt, PeerMatcher::Kind::kGicp}) {
+        PeerMatcher peer(kind, po);
+        std::mt19937 rng(o.seed);  // the same offsets as our window's
+        int ok = 0, n = 0;
+        std::vector<double> ms;
+        for (size_t i = 0; i < scans->size() && n < o.peer_count; ++i) {
+          const BenchScan& s = scans.value()[i];
+          const Pose6 prior = offsetPrior(s.truth, off.m, off.deg * M_PI / 180.0, rng);
+          auto target = targetCloud(mapping, s.truth.translation(), s.index, o.peer_target);
+          if (!target.ok()) {
+            std::fprintf(stderr, "%s\n", target.error().c_str());
+            continue;
+          }
+          peer.setTarget(target.value());
+          const PeerResult r = peer.align(s.points, toIsometry(prior));
+          const double e = (r.pose.translation() - s.truth.translation()).head<2>().norm();
+          const double eh = std::abs(angleDiff(yawOf(r.pose), yawOf(s.truth))) * 180.0 / M_PI;
+          ok += success(e, eh);
+          ++n;
+          ms.push_back(r.seconds * 1e3);
+          ScanRecord rec;
+          rec.section = "peers";
+          rec.window = off.ours.name;
+          rec.matcher = peer.name();
+          rec.scan = s.index;
+          rec.raw_points = static_cast<double>(s.points.size());
+          priorError(prior, s.truth, rec);
+          rec.matched = r.pose.matrix().allFinite();
+          rec.error_m = e;
+          rec.error_deg = eh;
+          rec.success = success(e, eh);
+          rec.total_ms = r.seconds * 1e3;
+          if (!r.converged) rec.failure = "not converged";
+          records.push_back(rec);
         }
-        peer.setTarget(target.value());
-        const PeerResult r = peer.align(s.points, toIsometry(prior));
-        const double e = (r.pose.translation() - s.truth.translation()).head<2>().norm();
-        const double eh = std::abs(angleDiff(yawOf(r.pose), yawOf(s.truth))) * 180.0 / M_PI;
-        ok += success(e, eh);
-        ++n;
-        ms.push_back(r.seconds * 1e3);
-        ScanRecord rec;
-        rec.section = "peers";
-        rec.window = rows[0].name;
-        rec.matcher = peer.name();
-        rec.scan = s.index;
-        rec.raw_points = static_cast<double>(s.points.size());
-        priorError(prior, s.truth, rec);
-        rec.matched = r.pose.matrix().allFinite();
-        rec.error_m = e;
-        rec.error_deg = eh;
-        rec.success = success(e, eh);
-        rec.total_ms = r.seconds * 1e3;
-        if (!r.converged) rec.failure = "not converged";
-        records.push_back(rec);
+        out.print("| %s | %s | %d | %d/%d (%.1f%%) | %.0f / %.0f |\n", peer.name().c_str(),
+                  offsets.c_str(), n, ok, n, 100.0 * ok / std::max(1, n), median(ms),
+                  percentile(ms, 99));
+        JsonObject p;
+        p.add("matcher", peer.name())
+            .add("offset_m", off.m)
+            .add("offset_deg", off.deg)
+            .add("scans", n)
+            .add("success", ok)
+            .add("ms_median", median(ms))
+            .add("ms_p99", percentile(ms, 99));
+        peer_json.push_back(p);
       }
-      out.print("| %s | %d | %d/%d (%.1f%%) | %.0f / %.0f |\n", peer.name().c_str(), n, ok, n,
-                100.0 * ok / std::max(1, n), median(ms), percentile(ms, 99));
-      JsonObject p;
-      p.add("matcher", peer.name())
-          .add("scans", n)
-          .add("success", ok)
-          .add("ms_median", median(ms))
-          .add("ms_p99", percentile(ms, 99));
-      peer_json.push_back(p);
+      const WindowRow& r = off.ours;
+      out.print("| gmm_localization (%s, above) | %s | %d | %d/%d (%.1f%%) | %.0f / %.0f |\n",
+                off.window, offsets.c_str(), r.runs, r.success, r.runs,
+                100.0 * r.success / std::max(1, r.runs), median(r.total_ms),
+                percentile(r.total_ms, 99));
     }
-    out.print("| gmm_localization (paper window, above) | %d | %d/%d (%.1f%%) | %.0f / %.0f |\n",
-              rows[0].runs, rows[0].success, rows[0].runs,
-              100.0 * rows[0].success / std::max(1, rows[0].runs), median(rows[0].total_ms),
-              percentile(rows[0].total_ms, 99));
     summary.add("peer_target", describe(o.peer_target)).add("peers", peer_json);
   }
 

@@ -142,7 +142,8 @@ TEST(BenchRegistration, RunsOnAKittiLayoutFolderWithAMissingScanAndACalibration)
                             " --mapping " + seq + " --kitti-calib " + seq +
                             "/calib.txt --count 0 --peer-count 4 --peer-target-stride 1"
                             " --peer-target-exclude 0 --exhaustive-every 0 --no-sizes"
-                            " --no-global --track-offset-m 1 --track-offset-deg 2 --out " +
+                            " --no-global --track-offset-m 1 --track-offset-deg 2 --threads 2"
+                            " --out " +
                             out;
   ASSERT_EQ(run(bench, log), 0) << slurp(log + ".err");
   const std::string stdout_text = slurp(log);
@@ -155,14 +156,18 @@ TEST(BenchRegistration, RunsOnAKittiLayoutFolderWithAMissingScanAndACalibration)
   EXPECT_NE(stdout_text.find("tracking: +-2 m, +-3 deg (offsets within 1 m, 2 deg)"),
             std::string::npos);
   EXPECT_NE(stdout_text.find("except the test scan itself"), std::string::npos);
+  // The threads table: every scan matched on 1 and 2 threads, the same results.
+  EXPECT_NE(stdout_text.find("## Threads: the whole match on 1 and 2 threads"), std::string::npos);
+  EXPECT_NE(stdout_text.find("This machine's own ceiling now"), std::string::npos);
 
   // The per-run files: the report as printed, one CSV row per registration, the JSON summary.
   EXPECT_EQ(slurp(out + "/summary.md"), stdout_text);
   const std::string csv = slurp(out + "/scans.csv");
   ASSERT_EQ(csv.rfind("section,window,matcher,scan,", 0), 0u) << csv;
   // Per matcher: ours in each window on the 4 scans that exist, the peers from the paper
-  // window's offsets. The scans are in the map: every match of ours succeeds when truth and
-  // map share the frame (columns: section 0, window 1, matcher 2, scan 3, success 11).
+  // window's offsets and from the tracking window's. The scans are in the map: every match of ours
+  // succeeds when truth and map share the frame (columns: section 0, window 1, matcher 2, scan 3,
+  // success 11).
   std::map<std::string, int> count, ok;
   std::set<std::string> scan_ids;
   double largest_track_offset = 0.0;
@@ -184,10 +189,13 @@ TEST(BenchRegistration, RunsOnAKittiLayoutFolderWithAMissingScanAndACalibration)
   EXPECT_EQ(count["window / tracking / gmm_localization"], 4);
   EXPECT_EQ(count["peers / paper / PCL NDT"], 4);
   EXPECT_EQ(count["peers / paper / PCL GICP"], 4);
+  EXPECT_EQ(count["peers / tracking / PCL NDT"], 4);
+  EXPECT_EQ(count["peers / tracking / PCL GICP"], 4);
   EXPECT_EQ(ok["window / paper / gmm_localization"], 4) << csv;
   EXPECT_EQ(ok["window / tracking / gmm_localization"], 4) << csv;
   const std::string json = slurp(out + "/summary.json");
   EXPECT_NE(json.find("\"skipped_without_file\": 1"), std::string::npos) << json;
   EXPECT_NE(json.find("\"skipped\": [3]"), std::string::npos);
   EXPECT_NE(json.find("\"offset_m\": 1,"), std::string::npos);
+  EXPECT_NE(json.find("\"identical_results\": 4, \"compared\": 4"), std::string::npos) << json;
 }

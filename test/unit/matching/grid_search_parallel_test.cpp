@@ -66,35 +66,5 @@ TEST(GridSearchParallel, OnSeveralThreadsTheSameOptimumAndTopLayer) {
   EXPECT_GE(compared, 60);
 }
 
-TEST(GridSearchParallel, OnSeveralThreadsTiesGoToTheSmallestKey) {
-  MapGeometry g = testing::randomMapGeometry();
-  GmmMap map(g);
-  for (int ty = -2; ty < 2; ++ty) {
-    for (int tx = -2; tx < 2; ++tx) {
-      auto tile = std::make_shared<GmmTile>(TileId{tx, ty}, g.tile_size_cells);
-      for (auto& cell : tile->cells()) cell.add({1.0f, 0.0f, 0.05f});
-      map.insert(tile);
-    }
-  }
-  RasterOptions o;
-  o.chunk_shift = 5;
-  o.num_layers = 4;
-  const ChunkMap chunks = testing::rasterizeRandomMap(map, o);
-  TaskPool pool(3);
-  for (int c = 0; c < 20; ++c) {
-    Pose6 prior;
-    prior.x = -3.0 + 0.17 * c;
-    prior.y = 1.0 - 0.05 * c;
-    PointList pts;
-    for (int i = 0; i < 30; ++i) pts.emplace_back(0.3f * i - 4.0f, 0.1f * (i % 7), 0.0f);
-    const SearchWindow w = SearchWindow::fromExtent(prior, 1.6, 1.2, 0.06, 0.02, 0.2);
-    auto problem = SearchProblem::create(chunks, pts, w);
-    ASSERT_TRUE(problem.ok());
-    const SearchOutcome bb = branchAndBoundSearch(problem.value(), {false}, nullptr, &pool);
-    expectSame(exhaustiveSearch(problem.value()), bb, c);
-    EXPECT_EQ(bb.tx + bb.ty + bb.heading_index, 0) << "ties go to the smallest key";
-  }
-}
-
 }  // namespace
 }  // namespace gmm_localization

@@ -116,6 +116,7 @@ TEST(GridSearch, TiesResolveIdenticallyOnAUniformMap) {
   o.chunk_shift = 5;
   o.num_layers = 4;
   const ChunkMap chunks = testing::rasterizeRandomMap(map, o);
+  TaskPool pool(3);
   std::mt19937 rng(9);
   for (int c = 0; c < 40; ++c) {
     Pose6 prior;
@@ -130,6 +131,8 @@ TEST(GridSearch, TiesResolveIdenticallyOnAUniformMap) {
     const SearchOutcome bb = branchAndBoundSearch(problem.value(), {false});
     expectSame(ex, bb, c);
     EXPECT_EQ(ex.tx + ex.ty + ex.heading_index, 0) << "ties go to the smallest key";
+    // Also when the passes of a pool each find a tied leaf of their own headings.
+    expectSame(ex, branchAndBoundSearch(problem.value(), {false}, nullptr, &pool), c);
   }
 }
 

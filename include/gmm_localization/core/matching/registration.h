@@ -47,7 +47,7 @@ struct RegistrationOptions {
   /// Threads a match runs on, the caller's included (core/common/task_pool.h): the per-heading
   /// rotation, the search's and the covariance's headings, the refinement's and the labels'
   /// points, the certificate's next node in parallel (the scan filter stays on one thread); 0:
-  /// one per hardware thread.
+  /// one per hardware thread. Pays only when the match has the cores to itself (benchmarks.md).
   /// The result is bit-identical for any count (the work is cut into pieces that do not depend
   /// on it); only the search statistics may differ.
   int threads = 1;
