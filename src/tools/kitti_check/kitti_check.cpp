@@ -4,6 +4,7 @@
 // (`cells`), and leave-one-out registration from random offsets by our search and by PCL NDT
 // and GICP (`register`). Prints markdown tables; see docs/real_data.md.
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
@@ -54,7 +55,12 @@ void usage(FILE* out = stderr) {
       "  --no-ours         the peers only\n"
       "  --ndt-resolution M, --ndt-step M, --peer-epsilon E, --peer-iterations N,\n"
       "  --peer-voxel M    peer options (default: the registration benchmark's, bench_peers.h)\n"
-      "  --heading-step-deg D  search heading step (registration default 0.5)\n");
+      "  --heading-step-deg D  search heading step (registration default 0.5)\n"
+      "  --refine-points N points the hill climb scores (registration default 3000; the\n"
+      "                    matcher's config/matcher.yaml 1500)\n"
+      "  --map-blur-sigma M  the maps' blur kernel sigma (build_map default 0.1; 0: no blur)\n"
+      "  --grid-shift M    shift the maps' cell grid by M in x and y (0): the errors that move\n"
+      "                    with it come from where structure falls in the 0.2 m cells\n");
 }
 
 struct Args {
@@ -99,6 +105,12 @@ bool parse(int argc, char** argv, Args& a) {
       a.loo.seed = static_cast<uint32_t>(std::atoi(v.c_str()));
     } else if (k == "--heading-step-deg") {
       a.loo.registration.heading_step_rad = std::atof(v.c_str()) * M_PI / 180.0;
+    } else if (k == "--refine-points") {
+      a.loo.registration.refine_max_points = static_cast<size_t>(std::max(0, std::atoi(v.c_str())));
+    } else if (k == "--map-blur-sigma") {
+      a.loo.map_blur_sigma_m = std::atof(v.c_str());
+    } else if (k == "--grid-shift") {
+      a.loo.grid_shift_m = std::atof(v.c_str());
     } else if (k == "--ndt-resolution") {
       a.loo.peer.ndt_resolution_m = std::atof(v.c_str());
     } else if (k == "--ndt-step") {
@@ -124,6 +136,11 @@ bool parse(int argc, char** argv, Args& a) {
   }
   if (a.data.dir.empty() || a.work.empty()) {
     std::fprintf(stderr, "--data and --work are required\n");
+    return false;
+  }
+  const std::string bad = a.loo.registration.validate();
+  if (!bad.empty()) {
+    std::fprintf(stderr, "registration options: %s\n", bad.c_str());
     return false;
   }
   return true;

@@ -78,6 +78,11 @@ void runPrior(const Registration* reg, const ChunkMap& raster, std::vector<Peer>
     if (r.ok()) {
       ours.evaluations_fraction = r->search.stats.fraction();
       poseErrors(toIsometry(r->pose), k.truth, ours);
+      Trial discrete;
+      poseErrors(toIsometry(r->search.pose), k.truth, discrete);
+      ours.discrete_error_m = discrete.error_m;
+      ours.discrete_error_long_m = discrete.error_long_m;
+      ours.discrete_error_lat_m = discrete.error_lat_m;
     } else {
       ours.failure = r.error();
     }
@@ -149,7 +154,11 @@ Result<LooReport> runLeaveOneOut(const LooOptions& o) {
                    (m.truth.translation() - k.truth.translation()).head<2>().norm());
     }
     const std::string map_dir = o.work_dir + "/loo_" + std::to_string(k.index);
-    auto built = buildMap(set->data, fold.map_keyframes, defaultMapOptions(map_dir));
+    MapBuilderOptions map_options = defaultMapOptions(map_dir);
+    map_options.blur_sigma_m = o.map_blur_sigma_m;
+    map_options.geometry.origin_x_m += o.grid_shift_m;
+    map_options.geometry.origin_y_m += o.grid_shift_m;
+    auto built = buildMap(set->data, fold.map_keyframes, map_options);
     if (!built.ok()) return R::failure(built.error());
     auto store = MapStore::open(map_dir);
     if (!store.ok()) return R::failure(store.error());

@@ -41,6 +41,8 @@ struct LooOptions {
   bench::PeerOptions peer;           ///< the benchmark's defaults unless changed
   double peer_target_voxel_m = 0.5;  ///< as the benchmark's target clouds
   double raster_radius_m = 110.0;    ///< chunks with data within this are rasterized [m]
+  double map_blur_sigma_m = 0.1;     ///< the fold maps' blur (build_map's default) [m]
+  double grid_shift_m = 0.0;         ///< the fold maps' cell grid shifted by this in x, y [m]
   RegistrationOptions registration;
   RasterOptions raster;
 };
@@ -62,9 +64,11 @@ struct Trial {
   double error_z_m = 0.0;                   ///< |z error| [m]
   double error_long_m = 0.0;  ///< signed error along the SLAM pose's heading (x forward) [m]
   double error_lat_m = 0.0;   ///< signed error across it (y left) [m]
-  double seconds = 0.0;       ///< wall time of the match, one thread
-  double cpu_seconds = 0.0;   ///< process CPU time of the match (robust to a busy machine)
-  RegistrationTiming stages;  ///< ours: time per stage (search_s: the search)
+  /// ours: the same errors of the search's discrete optimum, before the hill climb refines it.
+  double discrete_error_m = 0.0, discrete_error_long_m = 0.0, discrete_error_lat_m = 0.0;
+  double seconds = 0.0;               ///< wall time of the match, one thread
+  double cpu_seconds = 0.0;           ///< process CPU time of the match (robust to a busy machine)
+  RegistrationTiming stages;          ///< ours: time per stage (search_s: the search)
   double evaluations_fraction = 0.0;  ///< ours: node scores / exhaustive poses
   bool success() const { return matched && error_m < 0.5 && error_deg < 1.0; }
 };
