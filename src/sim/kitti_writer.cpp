@@ -8,6 +8,14 @@
 namespace gmm_localization {
 namespace sim {
 
+namespace {
+void writePoseLine(std::FILE* f, const Eigen::Isometry3d& pose) {
+  const Eigen::Matrix4d m = pose.matrix();
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 4; ++c) std::fprintf(f, "%.9e%c", m(r, c), (r == 2 && c == 3) ? '\n' : ' ');
+}
+}  // namespace
+
 Result<std::unique_ptr<KittiWriter>> KittiWriter::open(const std::string& dir, bool write_labels) {
   using R = Result<std::unique_ptr<KittiWriter>>;
   std::error_code ec;
@@ -29,6 +37,15 @@ Result<std::unique_ptr<KittiWriter>> KittiWriter::open(const std::string& dir, b
 }
 
 KittiWriter::~KittiWriter() { close(); }
+
+Status KittiWriter::writePoses(const std::string& path,
+                               const std::vector<Eigen::Isometry3d>& poses) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (!f) return Status::failure("kitti: cannot open " + path + ": " + std::strerror(errno));
+  for (const auto& p : poses) writePoseLine(f, p);
+  if (std::fclose(f) != 0) return Status::failure("kitti: writing " + path + " failed");
+  return Status::success();
+}
 
 Status KittiWriter::write(const std::vector<LidarPoint>& points, const Eigen::Isometry3d& pose,
                           double stamp) {
@@ -57,10 +74,7 @@ Status KittiWriter::write(const std::vector<LidarPoint>& points, const Eigen::Is
     if (std::fclose(g) != 0 || m != l.size())
       return Status::failure("kitti: short write to " + lab);
   }
-  const Eigen::Matrix4d m = pose.matrix();
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 4; ++c)
-      std::fprintf(poses_, "%.9e%c", m(r, c), (r == 2 && c == 3) ? '\n' : ' ');
+  writePoseLine(poses_, pose);
   std::fprintf(times_, "%.6f\n", stamp);
   ++count_;
   return Status::success();

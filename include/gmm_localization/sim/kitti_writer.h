@@ -27,6 +27,8 @@ class KittiWriter {
                double stamp);
   Status close();
   size_t scans() const { return count_; }
+  /// Writes `poses` to `path` in the poses.txt format (12 numbers per line, row-major 3x4).
+  static Status writePoses(const std::string& path, const std::vector<Eigen::Isometry3d>& poses);
 
  private:
   KittiWriter() = default;

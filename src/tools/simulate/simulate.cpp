@@ -8,6 +8,7 @@
 
 #include "common/cli_args.h"
 #include "gmm_localization/sim/kitti_writer.h"
+#include "gmm_localization/sim/map_pose_error.h"
 #include "gmm_localization/sim/simulation.h"
 #include "simulate/simulate_bag_writer.h"
 #include "simulate/simulate_options.h"
@@ -37,8 +38,10 @@ class OutputSink : public sim::SimulationSink {
   Status onImu(const sim::ImuSample& m) override { return bag ? bag->onImu(m) : Status::success(); }
   Status onDeskewedScan(const sim::DeskewedScan& s) override {
     if (!kitti || (count_++ % kitti_every) != 0) return Status::success();
+    truth.push_back(s.base_to_map);
     return kitti->write(s.points, s.base_to_map, s.stamp);
   }
+  std::vector<Eigen::Isometry3d> truth;  // the poses written to poses.txt, in order
 
  private:
   long count_ = 0;
@@ -127,6 +130,18 @@ int main(int argc, char** argv) {
   if (kitti) {
     const Status c = kitti->close();
     if (!c) return fail(c.error());
+    if (opt.map_pose_error.mode != sim::MapPoseErrorMode::kNone) {
+      // Keep the truth beside the SLAM-like poses that build_map will read.
+      const Status t = sim::KittiWriter::writePoses(opt.kitti_dir + "/poses_truth.txt", out.truth);
+      if (!t) return fail(t.error());
+      const sim::MapPoseError model(opt.map_pose_error);
+      const Status p =
+          sim::KittiWriter::writePoses(opt.kitti_dir + "/poses.txt", model.apply(out.truth));
+      if (!p) return fail(p.error());
+      if (!opt.quiet)
+        std::printf("map poses: realistic error, %zu loop-closure scans; truth in %s\n",
+                    model.closures(out.truth).size(), (opt.kitti_dir + "/poses_truth.txt").c_str());
+    }
   }
   const sim::SimulationStats& st = *stats;
   std::printf(

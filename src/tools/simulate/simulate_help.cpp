@@ -63,6 +63,16 @@ Output:
                            with ground truth), poses.txt (3x4 base_link->map), times.txt
   --kitti-every N          write every N-th scan (1)
   --kitti-labels           also write labels/NNNNNN.label (uint8 per point)
+  --map-pose-error MODE    poses.txt of --kitti: none (exact truth) | realistic (a SLAM back
+                           end's: smooth drift pinned back at loop closures; the truth then goes
+                           to poses_truth.txt as well) (none)
+  --map-drift-per-100m M   realistic: drift random-walk std per axis after 100 m of path (0.03)
+  --map-drift-deg-per-100m D  same for roll, pitch, yaw [deg] (0.05)
+  --map-residual-m M       realistic: RMS position residual left after optimisation (0.05)
+  --map-residual-deg D     realistic: RMS attitude residual [deg] (0.2)
+  --map-loop-radius M      realistic: a revisit closer than M (after >= 50 m of path) closes a
+                           loop (10)
+  --map-pose-seed N        realistic: seed of the pose error (1)
   --threads N              ray-casting threads (2)
   --dry-run                build the town and route, print their summary, write nothing
   --quiet                  no progress lines

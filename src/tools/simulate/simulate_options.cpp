@@ -254,6 +254,37 @@ Result<SimulateOptions> parseSimulateOptions(int argc, char** argv) {
          return o.kitti_every >= 1 ? Status::success()
                                    : Status::failure("option --kitti-every must be >= 1");
        }},
+      {"--map-drift-per-100m",
+       [&](double v) {
+         o.map_pose_error.drift_m_per_100m = v;
+         return Status::success();
+       }},
+      {"--map-drift-deg-per-100m",
+       [&](double v) {
+         o.map_pose_error.drift_deg_per_100m = v;
+         return Status::success();
+       }},
+      {"--map-residual-m",
+       [&](double v) {
+         o.map_pose_error.residual_m = v;
+         return Status::success();
+       }},
+      {"--map-residual-deg",
+       [&](double v) {
+         o.map_pose_error.residual_deg = v;
+         return Status::success();
+       }},
+      {"--map-loop-radius",
+       [&](double v) {
+         o.map_pose_error.loop_radius_m = v;
+         return Status::success();
+       }},
+      {"--map-pose-seed",
+       [&](double v) {
+         if (v < 0.0) return Status::failure("option --map-pose-seed must be >= 0");
+         o.map_pose_error.seed = static_cast<uint64_t>(v);
+         return Status::success();
+       }},
       {"--threads",
        [&](double v) {
          c.threads = static_cast<int>(v);
@@ -302,6 +333,12 @@ Result<SimulateOptions> parseSimulateOptions(int argc, char** argv) {
       o.kitti_dir = v;
       continue;
     }
+    if (a == "--map-pose-error") {
+      auto m = sim::parseMapPoseErrorMode(v);
+      if (!m) return R::failure("option --map-pose-error: " + m.error());
+      o.map_pose_error.mode = *m;
+      continue;
+    }
     if (a == "--route") {
       auto nodes = parseRoute(v);
       if (!nodes) return R::failure(nodes.error());
@@ -334,6 +371,11 @@ Result<SimulateOptions> parseSimulateOptions(int argc, char** argv) {
   }
   if (!o.dry_run && o.bag.path.empty() && o.kitti_dir.empty())
     return R::failure("no output: give --bag FILE and/or --kitti DIR (or --dry-run)");
+  const Status mpe = o.map_pose_error.validate();
+  if (!mpe) return R::failure(mpe.error());
+  if (o.map_pose_error.mode != sim::MapPoseErrorMode::kNone && o.kitti_dir.empty() && !o.dry_run)
+    return R::failure("option --map-pose-error " +
+                      std::string("realistic changes the poses of --kitti DIR: give --kitti"));
   c.emit_revolutions = o.bag.per_sensor_clouds;
   c.emit_merged = !o.bag.path.empty() && o.bag.merged_cloud;
   c.emit_deskewed = !o.kitti_dir.empty();

@@ -3,6 +3,7 @@
 
 #include <string>
 
+#include "gmm_localization/sim/map_pose_error.h"
 #include "gmm_localization/sim/simulation.h"
 #include "simulate/simulate_bag_writer.h"
 
@@ -15,6 +16,7 @@ struct SimulateOptions {
   std::string kitti_dir;  // empty = no KITTI output
   int kitti_every = 1;
   bool kitti_labels = false;
+  sim::MapPoseErrorConfig map_pose_error;  // error of the poses written to poses.txt
   bool quiet = false;
   bool dry_run = false;
   bool help = false;
