@@ -189,11 +189,12 @@ for s in $SANITIZERS; do
     tsan)
       # The threaded tests: every simulator test (the ray caster and the runs use a thread pool),
       # the chunk engine's worker threads (serving, tile retries), the map builder's parallel fit,
-      # the match's task pool and the search's parallel passes.
+      # the match's task pool, the search's parallel passes and the global search's queues.
       pass tsan thread "$TSAN_CXX" unit_:test/unit/sim unit_:test/unit/raster/chunk_engine_test.cpp \
         unit_:test/unit/raster/chunk_engine_retry_test.cpp \
         unit_:test/unit/mapping/map_builder_test.cpp unit_:test/unit/common/task_pool_test.cpp \
-        unit_:test/unit/matching/grid_search_parallel_test.cpp || status=1
+        unit_:test/unit/matching/grid_search_parallel_test.cpp \
+        unit_:test/unit/matching/global_search_test.cpp || status=1
       ;;
     *) echo "[sanitizers] unknown pass '$s' (asan, tsan)" >&2; status=1 ;;
   esac

@@ -1,6 +1,7 @@
 #include "gmm_localization/core/matching/global_search.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <queue>
 #include <string>
@@ -30,8 +31,8 @@ struct IntervalLower {
   }
 };
 
-int ceilLog2(int64_t n) {
-  return n <= 1 ? 0 : 64 - __builtin_clzll(static_cast<unsigned long long>(n - 1));
+int floorLog2(int64_t n) {
+  return n <= 1 ? 0 : 63 - __builtin_clzll(static_cast<unsigned long long>(n));
 }
 
 /// Upper bound of the base values over cells [sx, ex) x [sy, ey) at z bin zb, a block no larger
@@ -48,6 +49,14 @@ uint8_t blockMax(const RasterWindow& raster, int k, int64_t sx, int64_t sy, int6
   lookups += 3;
   return raster.neighbourBound(k, sx, sy, std::max(ex - sx, ey - sy), zb);
 }
+
+/// A table read in flight: the cell's span, then (once the span is read) the value's address.
+struct PendingRead {
+  const uint32_t* span;  ///< begin, first z bin, next cell's begin
+  const uint8_t* value;  ///< the layer's values, then the value read (nullptr: the floor)
+  int32_t z;             ///< the point's z bin in the layer's units
+  uint32_t point;
+};
 
 /// Offset of the prior's cell from the cells of SearchProblem's points at translation (0, 0).
 struct PriorCell {
@@ -84,11 +93,15 @@ std::string GlobalSearchOptions::validate() const {
     return "typical_range_quantile must be in [0, 1]";
   }
   if (max_evaluations < 0) return "max_evaluations must be >= 0";
+  if (queues < 0 || queues > 64) return "queues=" + std::to_string(queues) + " must be in [0, 64]";
+  if (max_reads_per_point < 1 || max_reads_per_point > 16) {
+    return "max_reads_per_point=" + std::to_string(max_reads_per_point) + " must be in [1, 16]";
+  }
   return {};
 }
 
 int64_t headingIntervalBound(const SearchProblem& problem, int j0, int heading_level, int layer,
-                             int tx, int ty, int64_t* lookups) {
+                             int tx, int ty, int64_t* lookups, int max_reads_per_point) {
   const SearchWindow& w = problem.window();
   const int max_layer = problem.map().options().num_layers;
   const int j1 = std::min(j0 + (1 << heading_level), w.sizeH()) - 1;
@@ -99,81 +112,149 @@ int64_t headingIntervalBound(const SearchProblem& problem, int j0, int heading_l
   }
   const int jm = j0 + (j1 - j0) / 2;
   const double delta = std::max(jm - j0, j1 - jm) * w.heading_step_rad;
+  // Per-axis reach of a rotation by at most delta (global_search.h): |cos a - 1| <= 1 - cos delta
+  // for delta <= pi, |sin a| <= sin delta for delta <= pi / 2 (else 1, and 2 for the cosine).
+  const double cos_reach = delta < M_PI ? 1.0 - std::cos(delta) : 2.0;
+  const double sin_reach = delta < M_PI / 2 ? std::sin(delta) : 1.0;
   const RasterWindow& raster = problem.raster();
   const PriorCell prior = priorCell(problem);
   const int64_t block = int64_t{1} << layer;
+  const int max_reads = std::max(1, max_reads_per_point);
+  const int64_t mask = (int64_t{1} << raster.shift()) - 1;
+  // Three passes, so that the table reads of all points are in flight together (each read is
+  // two dependent cache misses, the span then the value): addresses and span prefetches, then
+  // value prefetches, then the maxima.
+  thread_local std::vector<PendingRead> pending;
+  thread_local std::vector<uint8_t> point_max;
+  pending.clear();
+  point_max.assign(pts.size(), 0);
   int64_t reads = 0;
-  int64_t sum = 0;
-  for (const CellPoint& p : pts) {
-    const int64_t m =
-        delta > 0.0 ? static_cast<int64_t>(std::ceil(rangeCells(p, prior) * delta + 1e-6)) : 0;
-    const int64_t n = block + 2 * m;  // cells per axis the point can read
-    const int k = std::min(max_layer, ceilLog2(n));
-    const int64_t b = int64_t{1} << k;
-    const int64_t nb = (n + b - 1) / b;
-    if (nb > 4) {  // too spread out to be worth 25+ reads: the largest value any cell holds
-      sum += static_cast<int64_t>(p.count) * 255;
+  for (size_t pi = 0; pi < pts.size(); ++pi) {
+    const CellPoint& p = pts[pi];
+    int64_t mx = 0, my = 0;
+    if (delta > 0.0) {
+      const double ax = std::abs(static_cast<double>(p.gx - prior.ox)) + 1.0;
+      const double ay = std::abs(static_cast<double>(p.gy - prior.oy)) + 1.0;
+      const double chord = std::hypot(ax, ay) * delta;
+      mx = static_cast<int64_t>(std::ceil(std::min(chord, ax * cos_reach + ay * sin_reach) + 1e-6));
+      my = static_cast<int64_t>(std::ceil(std::min(chord, ay * cos_reach + ax * sin_reach) + 1e-6));
+    }
+    // The rectangle the point can read, nx x ny cells from (sx, sy), covered by blocks of layer
+    // k: sliding-window maxima, so blocks may overlap and the last one ends at the edge.
+    const int64_t nx = block + 2 * mx, ny = block + 2 * my;
+    int k = std::min(max_layer, floorLog2(std::min(nx, ny)));
+    int64_t b = int64_t{1} << k;
+    int64_t cx = (nx + b - 1) / b, cy = (ny + b - 1) / b;
+    while (cx * cy > max_reads && k < max_layer) {
+      ++k;
+      b <<= 1;
+      cx = (nx + b - 1) / b;
+      cy = (ny + b - 1) / b;
+    }
+    if (cx * cy > 16) {  // too spread out to be worth the reads: the largest value any cell holds
+      point_max[pi] = 255;
       continue;
     }
-    const int64_t sx = int64_t{p.gx} + tx - m, sy = int64_t{p.gy} + ty - m;
-    uint8_t v = 0;
-    for (int64_t by = 0; by < nb; ++by) {
-      const int64_t y0 = sy + by * b, y1 = std::min(y0 + b, sy + n);
-      for (int64_t bx = 0; bx < nb; ++bx) {
-        const int64_t x0 = sx + bx * b, x1 = std::min(x0 + b, sx + n);
-        v = std::max(v, blockMax(raster, k, x0, y0, x1, y1, p.zb, reads));
+    const int64_t sx = int64_t{p.gx} + tx - mx, sy = int64_t{p.gy} + ty - my;
+    for (int64_t iy = 0; iy < cy; ++iy) {
+      const int64_t y0 = iy + 1 < cy ? sy + iy * b : std::max(sy, sy + ny - b);
+      for (int64_t ix = 0; ix < cx; ++ix) {
+        const int64_t x0 = ix + 1 < cx ? sx + ix * b : std::max(sx, sx + nx - b);
+        const MapChunk* c = raster.chunk(x0, y0);
+        if (c == nullptr) {  // rare: the block starts in a chunk that is not loaded
+          const int64_t x1 = std::min(x0 + b, sx + nx), y1 = std::min(y0 + b, sy + ny);
+          point_max[pi] = std::max(point_max[pi], blockMax(raster, k, x0, y0, x1, y1, p.zb, reads));
+          continue;
+        }
+        ++reads;
+        const RasterLayer& L = c->layer(k);
+        const size_t i =
+            (static_cast<size_t>(y0 & mask) << raster.shift()) + static_cast<size_t>(x0 & mask);
+        const uint32_t* span = L.spans + 2 * i;
+        __builtin_prefetch(span);
+        pending.push_back({span, L.values, p.zb >> L.z_shift, static_cast<uint32_t>(pi)});
       }
     }
-    sum += static_cast<int64_t>(p.count) * v;
+  }
+  for (PendingRead& r : pending) {
+    const uint32_t begin = r.span[0];
+    const uint32_t n = r.span[2] - begin;
+    const uint32_t z = static_cast<uint32_t>(r.z - static_cast<int32_t>(r.span[1]));
+    r.value = z < n ? r.value + begin + z : nullptr;  // outside the stored span: the floor
+    if (r.value != nullptr) __builtin_prefetch(r.value);
+  }
+  for (const PendingRead& r : pending) {
+    if (r.value != nullptr) point_max[r.point] = std::max(point_max[r.point], *r.value);
+  }
+  int64_t sum = 0;
+  for (size_t pi = 0; pi < pts.size(); ++pi) {
+    sum += static_cast<int64_t>(pts[pi].count) * point_max[pi];
   }
   if (lookups != nullptr) *lookups += reads;
   return sum;
 }
 
-GlobalSearchOutcome globalBranchAndBound(const SearchProblem& problem,
-                                         const GlobalSearchOptions& options) {
+namespace {
+
+/// What one queue of the search found: its best leaf (when it popped one) and its counts.
+struct QueueResult {
+  bool found = false;
+  IntervalNode leaf{};
+  SearchStats stats;
+  int64_t heading_splits = 0;
+  int64_t translation_splits = 0;
+  int64_t point_lookups = 0;
+};
+
+/// State the queues share: the best leaf score proven so far (the pruning threshold) and the
+/// node budget.
+struct SharedSearch {
+  std::atomic<int64_t> incumbent{-1};
+  std::atomic<int64_t> evaluations{0};
+  std::atomic<bool> budget_hit{false};
+
+  void raise(int64_t score) {
+    int64_t cur = incumbent.load();
+    while (score > cur && !incumbent.compare_exchange_weak(cur, score)) {
+    }
+  }
+};
+
+/// Best-first branch-and-bound over the roots r with r % queues == q.
+QueueResult searchQueue(const SearchProblem& problem, const GlobalSearchOptions& options,
+                        double typical_range, int q, int queues, SharedSearch& shared) {
   const SearchWindow& w = problem.window();
   const int max_layer = problem.map().options().num_layers;
   const int root_layer = options.root_layer < 0 ? problem.topLayer() : options.root_layer;
   const int root_hl = options.root_heading_levels;
-  GlobalSearchOutcome out;
-  SearchStats stats;
-  stats.exhaustive_poses = w.poses();
-  stats.top_layer = root_layer;
-  stats.evaluations_per_layer.assign(std::max(root_layer, max_layer) + 1, 0);
-
-  // The typical point's range [cells], deciding which axis a node splits (any choice is exact).
-  double typical_range = 0.0;
-  {
-    const PriorCell prior = priorCell(problem);
-    std::vector<double> r;
-    for (const CellPoint& p : problem.points(w.half_h)) r.push_back(rangeCells(p, prior));
-    if (!r.empty()) {
-      const size_t i = std::min(
-          r.size() - 1, static_cast<size_t>(options.typical_range_quantile * (r.size() - 1)));
-      std::nth_element(r.begin(), r.begin() + static_cast<std::ptrdiff_t>(i), r.end());
-      typical_range = r[i];
+  QueueResult out;
+  out.stats.evaluations_per_layer.assign(std::max(root_layer, max_layer) + 1, 0);
+  auto count = [&](int layer) {
+    ++out.stats.evaluations;
+    ++out.stats.evaluations_per_layer[layer];
+    const int64_t total = shared.evaluations.fetch_add(1) + 1;
+    if (options.max_evaluations > 0 && total >= options.max_evaluations) {
+      shared.budget_hit = true;
     }
-  }
-
-  auto bound = [&](int j0, int hl, int layer, int tx, int ty) {
-    ++stats.evaluations;
-    ++stats.evaluations_per_layer[layer];
-    return headingIntervalBound(problem, j0, hl, layer, tx, ty, &out.point_lookups);
   };
-  int64_t incumbent = -1;
-  if (options.prior_as_incumbent) incumbent = bound(w.half_h, 0, 0, w.half_x, w.half_y);
-
+  auto bound = [&](int j0, int hl, int layer, int tx, int ty) {
+    count(layer);
+    return headingIntervalBound(problem, j0, hl, layer, tx, ty, &out.point_lookups,
+                                options.max_reads_per_point);
+  };
   std::priority_queue<IntervalNode, std::vector<IntervalNode>, IntervalLower> queue;
   auto push = [&](const IntervalNode& n) {
-    if (n.bound < incumbent) return;
+    if (n.bound < shared.incumbent.load(std::memory_order_relaxed)) return;
     queue.push(n);
-    stats.queue_peak = std::max<int64_t>(stats.queue_peak, static_cast<int64_t>(queue.size()));
+    out.stats.queue_peak =
+        std::max<int64_t>(out.stats.queue_peak, static_cast<int64_t>(queue.size()));
   };
   const int stride = 1 << root_layer;
+  int64_t root = 0;
   for (int j0 = 0; j0 < w.sizeH(); j0 += 1 << root_hl) {
     for (int ty = 0; ty < w.sizeY(); ty += stride) {
       for (int tx = 0; tx < w.sizeX(); tx += stride) {
+        if (root++ % queues != q) continue;
         push({bound(j0, root_hl, root_layer, tx, ty), j0, ty, tx, static_cast<int16_t>(root_layer),
               static_cast<int16_t>(root_hl)});
       }
@@ -183,11 +264,15 @@ GlobalSearchOutcome globalBranchAndBound(const SearchProblem& problem,
   while (!queue.empty()) {
     const IntervalNode n = queue.top();
     queue.pop();
+    // Everything left is below a leaf another queue proved: nothing here can win.
+    if (n.bound < shared.incumbent.load(std::memory_order_relaxed)) break;
     if (n.layer == 0 && n.heading_level == 0) {
-      out.best = search_detail::makeOutcome(problem, n.j0, n.tx, n.ty, n.bound, std::move(stats));
+      out.found = true;
+      out.leaf = n;
+      shared.raise(n.bound);
       return out;
     }
-    if (options.max_evaluations > 0 && stats.evaluations >= options.max_evaluations) break;
+    if (shared.budget_hit.load(std::memory_order_relaxed)) break;
     bool split_heading = n.layer == 0;
     if (n.heading_level > 0 && n.layer > 0) {
       const double half_interval = (1 << (n.heading_level - 1)) * w.heading_step_rad;
@@ -221,8 +306,7 @@ GlobalSearchOutcome globalBranchAndBound(const SearchProblem& problem,
         if (tx >= w.sizeX()) break;
         int64_t s;
         if (exact_layer) {
-          ++stats.evaluations;
-          ++stats.evaluations_per_layer[child];
+          count(child);
           s = quad[dy * 2 + dx];
         } else {
           s = bound(n.j0, n.heading_level, child, tx, ty);
@@ -231,10 +315,82 @@ GlobalSearchOutcome globalBranchAndBound(const SearchProblem& problem,
       }
     }
   }
+  return out;
+}
+
+}  // namespace
+
+GlobalSearchOutcome globalBranchAndBound(const SearchProblem& problem,
+                                         const GlobalSearchOptions& options, TaskPool* pool) {
+  const SearchWindow& w = problem.window();
+  const int max_layer = problem.map().options().num_layers;
+  const int root_layer = options.root_layer < 0 ? problem.topLayer() : options.root_layer;
+  GlobalSearchOutcome out;
+  SearchStats stats;
+  stats.exhaustive_poses = w.poses();
+  stats.top_layer = root_layer;
+  stats.evaluations_per_layer.assign(std::max(root_layer, max_layer) + 1, 0);
+
+  // The typical point's range [cells], deciding which axis a node splits (any choice is exact).
+  double typical_range = 0.0;
+  {
+    const PriorCell prior = priorCell(problem);
+    std::vector<double> r;
+    for (const CellPoint& p : problem.points(w.half_h)) r.push_back(rangeCells(p, prior));
+    if (!r.empty()) {
+      const size_t i = std::min(
+          r.size() - 1, static_cast<size_t>(options.typical_range_quantile * (r.size() - 1)));
+      std::nth_element(r.begin(), r.begin() + static_cast<std::ptrdiff_t>(i), r.end());
+      typical_range = r[i];
+    }
+  }
+
+  SharedSearch shared;
+  int64_t prior_score = -1;
+  if (options.prior_as_incumbent) {
+    prior_score = headingIntervalBound(problem, w.half_h, 0, 0, w.half_x, w.half_y,
+                                       &out.point_lookups, options.max_reads_per_point);
+    ++stats.evaluations;
+    ++stats.evaluations_per_layer[0];
+    shared.evaluations = 1;
+    shared.incumbent = prior_score;
+  }
+  // The queues share the best leaf score proven so far; each pops its own best-first and stops
+  // when its best bound falls below it. The optimum: the best leaf over the queues, the
+  // smallest key among equal scores (global_search.h), for any number of queues.
+  const int queues = options.queues > 0 ? options.queues : (pool != nullptr ? pool->threads() : 1);
+  std::vector<QueueResult> results(static_cast<size_t>(queues));
+  parallelFor(pool, queues, [&](int q) {
+    results[static_cast<size_t>(q)] =
+        searchQueue(problem, options, typical_range, q, queues, shared);
+  });
+  const QueueResult* best = nullptr;
+  for (const QueueResult& r : results) {
+    stats.evaluations += r.stats.evaluations;
+    for (size_t l = 0; l < r.stats.evaluations_per_layer.size(); ++l) {
+      stats.evaluations_per_layer[l] += r.stats.evaluations_per_layer[l];
+    }
+    stats.queue_peak += r.stats.queue_peak;
+    out.heading_splits += r.heading_splits;
+    out.translation_splits += r.translation_splits;
+    out.point_lookups += r.point_lookups;
+    if (!r.found) continue;
+    if (best == nullptr || r.leaf.bound > best->leaf.bound ||
+        (r.leaf.bound == best->leaf.bound &&
+         search_detail::keyLess(r.leaf.j0, r.leaf.ty, r.leaf.tx, best->leaf.j0, best->leaf.ty,
+                                best->leaf.tx))) {
+      best = &r;
+    }
+  }
+  if (best != nullptr && !shared.budget_hit) {
+    out.best = search_detail::makeOutcome(problem, best->leaf.j0, best->leaf.tx, best->leaf.ty,
+                                          best->leaf.bound, std::move(stats));
+    return out;
+  }
   // Budget reached (or, were a bound not admissible, nothing left): the prior, not an optimum.
   out.complete = false;
   out.best = search_detail::makeOutcome(problem, w.half_h, w.half_x, w.half_y,
-                                        std::max<int64_t>(incumbent, 0), std::move(stats));
+                                        std::max<int64_t>(prior_score, 0), std::move(stats));
   return out;
 }
 

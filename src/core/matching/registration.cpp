@@ -244,7 +244,7 @@ SearchOutcome Registration::search(const SearchProblem& problem,
   // Algorithm 2 (reference) or 3 over x, y, heading; wide heading ranges over intervals.
   if (options_.exhaustive) return exhaustiveSearch(problem);
   if (problem.window().sizeH() >= options_.interval_search_min_headings) {
-    GlobalSearchOutcome g = globalBranchAndBound(problem, options_.global);
+    GlobalSearchOutcome g = globalBranchAndBound(problem, options_.global, pool_.get());
     if (complete != nullptr) *complete = g.complete;
     return std::move(g.best);
   }

@@ -72,6 +72,8 @@ const char* benchUsage() {
          "  --global-budget N    node scores the global search may compute (default: unbounded)\n"
          "  --global-root-headings L  root heading intervals of 2^L headings (default)\n"
          "  --global-split-share S    heading-vs-translation split rule (default)\n"
+         "  --global-threads N   threads of the global search (2)\n"
+         "  --global-reads N     layer reads per point and node in the interval bound (default)\n"
          "  --no-global          skip the global-localization table\n"
          "  --no-sizes           skip the scan-size table\n"
          "  --no-memory-floor    skip measuring memory latency and bandwidth (256 MB, about 2 s)\n"
@@ -160,10 +162,12 @@ bool parseBenchOptions(int argc, char** argv, BenchOptions& o, bool& help) {
       {"--layers", integer(o.raster.num_layers, 0)},
       {"--refine-points", integer(o.reg.refine_max_points, 1)},
       {"--global-count", integer(o.global_count, 0)},
+      {"--global-threads", integer(o.global_threads, 1)},
       {"--global-points", integer(o.reg.global.max_points, 1)},
       {"--global-budget", integer(global_budget, 0)},
       {"--global-root-headings", integer(o.reg.global.root_heading_levels, 0)},
       {"--global-split-share", real(o.reg.global.heading_split_share, 0.0)},
+      {"--global-reads", integer(o.reg.global.max_reads_per_point, 1)},
       {"--global-regions",
        [&o](const char* v) {
          o.global_regions_m.clear();

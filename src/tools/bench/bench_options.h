@@ -30,6 +30,7 @@ struct BenchOptions {
   bool global = true;
   bool memory_floor = true;  ///< --no-memory-floor: skip the memory latency and bandwidth
   int global_count = 10;
+  int global_threads = 2;  ///< --global-threads: threads the global search's queues run on
   std::vector<double> global_regions_m = {25.0, 50.0, 100.0};
   RegistrationOptions reg;
   RasterOptions raster;

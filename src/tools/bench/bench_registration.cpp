@@ -14,6 +14,7 @@
 #include <ctime>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <random>
 #include <string>
 #include <thread>
@@ -614,7 +615,10 @@ int main(int argc, char** argv) {
     // Global localization: a prior anywhere in a disc inside the square region, any heading;
     // the search covers the whole square and the full turn. The map is rasterized around the
     // priors, as the map server serves it around a rough fix: the region plus the scan reach.
-    out.print("\n## Global localization (heading-interval branch-and-bound, one thread)\n\n");
+    out.print("\n## Global localization (heading-interval branch-and-bound, %d thread%s)\n\n",
+              o.global_threads, o.global_threads == 1 ? "" : "s");
+    std::unique_ptr<TaskPool> global_pool;
+    if (o.global_threads > 1) global_pool = std::make_unique<TaskPool>(o.global_threads);
     out.print(
         "| region | loaded map | scans | poses per search (millions) | search ms median / max | "
         "match total ms median / max | evaluations (median) | evaluations x search points, "
@@ -670,7 +674,8 @@ int main(int argc, char** argv) {
             continue;
           }
           const double t1 = now();
-          const GlobalSearchOutcome g = globalBranchAndBound(prepared->problem, o.reg.global);
+          const GlobalSearchOutcome g =
+              globalBranchAndBound(prepared->problem, o.reg.global, global_pool.get());
           const double t2 = now();
           search_ms.push_back((t2 - t1) * 1e3);
           evals.push_back(static_cast<double>(g.best.stats.evaluations));

@@ -60,11 +60,20 @@ void usage(FILE* out = stderr) {
       "                    matcher's config/matcher.yaml 1500)\n"
       "  --map-blur-sigma M  the maps' blur kernel sigma (build_map default 0.1; 0: no blur)\n"
       "  --grid-shift M    shift the maps' cell grid by M in x and y (0): the errors that move\n"
-      "                    with it come from where structure falls in the 0.2 m cells\n");
+      "                    with it come from where structure falls in the 0.2 m cells\n"
+      "  --global-region M also a global window: M x M m and the full turn, offsets within\n"
+      "                    0.45 M and any heading (0: not; global_search.h)\n"
+      "  --global-budget N node scores the global search may compute (200000; 0: unbounded)\n"
+      "  --global-points N its search points (200)\n"
+      "  --z-period N      the rasters' z coarsening period (2; 0: none, tighter bounds, twice\n"
+      "                    the memory)\n"
+      "  --threads N       threads of a match, the global search's queues included (1; 0: one\n"
+      "                    per hardware thread)\n");
 }
 
 struct Args {
   std::string mode, work;
+  double global_region_m = 0.0;
   KittiInput data;
   LooOptions loo;
 };
@@ -107,6 +116,24 @@ bool parse(int argc, char** argv, Args& a) {
       a.loo.registration.heading_step_rad = std::atof(v.c_str()) * M_PI / 180.0;
     } else if (k == "--refine-points") {
       a.loo.registration.refine_max_points = static_cast<size_t>(std::max(0, std::atoi(v.c_str())));
+    } else if (k == "--global-region") {
+      a.global_region_m = std::atof(v.c_str());
+      if (!(a.global_region_m >= 0.0 && a.global_region_m <= 400.0)) {
+        std::fprintf(stderr, "--global-region must be in [0, 400] m\n");
+        return false;
+      }
+    } else if (k == "--global-budget") {
+      a.loo.registration.global.max_evaluations = std::atoll(v.c_str());
+    } else if (k == "--global-points") {
+      a.loo.registration.global.max_points = static_cast<size_t>(std::max(0, std::atoi(v.c_str())));
+    } else if (k == "--z-period") {
+      a.loo.raster.z_coarsening_period = std::atoi(v.c_str());
+    } else if (k == "--threads") {
+      a.loo.registration.threads = std::atoi(v.c_str());
+      if (a.loo.registration.threads < 0) {
+        std::fprintf(stderr, "--threads must be >= 0\n");
+        return false;
+      }
     } else if (k == "--map-blur-sigma") {
       a.loo.map_blur_sigma_m = std::atof(v.c_str());
     } else if (k == "--grid-shift") {
@@ -141,6 +168,11 @@ bool parse(int argc, char** argv, Args& a) {
   const std::string bad = a.loo.registration.validate();
   if (!bad.empty()) {
     std::fprintf(stderr, "registration options: %s\n", bad.c_str());
+    return false;
+  }
+  const std::string bad_raster = a.loo.raster.validate();
+  if (!bad_raster.empty()) {
+    std::fprintf(stderr, "raster options: %s\n", bad_raster.c_str());
     return false;
   }
   return true;
@@ -209,6 +241,18 @@ int runCells(const Args& a) {
 int runRegister(Args a) {
   a.loo.data = a.data;
   a.loo.work_dir = a.work;
+  if (a.global_region_m > 0.0) {
+    a.loo.windows = defaultWindows();
+    WindowSpec g;
+    g.name = "global " + std::to_string(static_cast<int>(std::lround(a.global_region_m))) +
+             " m x " + std::to_string(static_cast<int>(std::lround(a.global_region_m))) +
+             " m, 360 deg";
+    g.half_m = a.global_region_m / 2.0;
+    g.half_deg = 180.0;
+    g.offset_m = 0.45 * a.global_region_m;
+    g.offset_deg = 180.0;
+    a.loo.windows.push_back(g);
+  }
   auto report = runLeaveOneOut(a.loo);
   if (!report.ok()) {
     std::fprintf(stderr, "%s\n", report.error().c_str());

@@ -6,6 +6,7 @@
 #include "gmm_localization/core/matching/global_search.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <random>
 
@@ -52,6 +53,7 @@ void expectSame(const SearchOutcome& ex, const GlobalSearchOutcome& g, int c) {
 }
 
 TEST(GlobalSearch, EqualsExhaustiveOverTheFullTurnOnRandomCases) {
+  TaskPool pool(2);
   int cases = 0;
   for (int coarsen : {0, 2}) {
     // Also a map of isolated cells with a few far points: optima then hinge on a swing.
@@ -79,10 +81,50 @@ TEST(GlobalSearch, EqualsExhaustiveOverTheFullTurnOnRandomCases) {
       go.root_layer = c % 4 == 1 ? 6 : -1;  // 6 > num_layers: several reads per point
       go.prior_as_incumbent = (c % 2) == 0;
       go.heading_split_share = c % 5 == 0 ? 4.0 : 0.5;
-      expectSame(ex, globalBranchAndBound(problem.value(), go), c);
+      go.max_reads_per_point = std::array<int, 4>{1, 2, 4, 16}[c % 4];
+      // One queue, several in turn on one thread, several in parallel.
+      go.queues = c % 4;  // 0: one per thread of the pool
+      expectSame(ex, globalBranchAndBound(problem.value(), go, c % 2 == 0 ? &pool : nullptr), c);
     }
   }
   EXPECT_GE(cases, 40);
+}
+
+TEST(GlobalSearch, EqualScoresInSeveralQueuesGiveTheExhaustiveTieBreak) {
+  // One or two points over a map of isolated cells: many poses share the best score, spread
+  // over roots of different queues. Queues run in turn here (no pool), so a later queue always
+  // meets an incumbent equal to its own best and must not stop at it.
+  const GmmMap map = testing::randomMap(17, testing::randomMapGeometry(), -2, -2, 4, 4, 0.95);
+  RasterOptions o;
+  o.chunk_shift = 5;
+  o.num_layers = 4;
+  o.z_coarsening_period = 0;
+  const ChunkMap chunks = testing::rasterizeRandomMap(map, o);
+  std::mt19937 rng(23);
+  int cases = 0, tied = 0;
+  for (int c = 0; c < 40; ++c) {
+    const SearchWindow w = fullTurnWindow(rng, 8.0);
+    auto problem = SearchProblem::create(chunks, testing::randomPoints(rng, 1 + c % 2, 4.0), w);
+    if (!problem.ok()) continue;
+    const SearchOutcome ex = exhaustiveSearch(problem.value());
+    int64_t best_count = 0;  // leaves with the best score
+    for (int j = 0; j < w.sizeH(); ++j) {
+      for (int y = 0; y < w.sizeY(); ++y) {
+        for (int x = 0; x < w.sizeX(); ++x) best_count += problem->score(j, 0, x, y) == ex.score;
+      }
+    }
+    tied += best_count > 1;
+    for (int queues : {2, 3, 5}) {
+      GlobalSearchOptions go;
+      go.queues = queues;
+      go.root_heading_levels = 2;
+      go.root_layer = 2;  // many roots, so that equal leaves fall in different queues
+      expectSame(ex, globalBranchAndBound(problem.value(), go), c * 10 + queues);
+      ++cases;
+    }
+  }
+  EXPECT_GE(cases, 90);
+  EXPECT_GE(tied, 20);  // the case this test is about
 }
 
 TEST(GlobalSearch, IntervalBoundIsAtLeastEveryLeafBelowIt) {
@@ -113,9 +155,12 @@ TEST(GlobalSearch, IntervalBoundIsAtLeastEveryLeafBelowIt) {
       const int tx = static_cast<int>(u(rng) * w.sizeX());
       const int ty = static_cast<int>(u(rng) * w.sizeY());
       const int64_t best = bestLeaf(problem, j0, hl, layer, tx, ty);
-      const int64_t b = headingIntervalBound(problem, j0, hl, layer, tx, ty);
-      ASSERT_GE(b, best) << "case " << c << " node " << k << " hl " << hl << " layer " << layer;
-      if (b == best) ++tight;
+      for (int reads : {1, 4, 16}) {
+        const int64_t b = headingIntervalBound(problem, j0, hl, layer, tx, ty, nullptr, reads);
+        ASSERT_GE(b, best) << "case " << c << " node " << k << " hl " << hl << " layer " << layer
+                           << " reads " << reads;
+        if (b == best && reads == 4) ++tight;
+      }
     }
   }
   EXPECT_GE(nodes, 800);
