@@ -90,6 +90,34 @@ TEST(GlobalSearch, EqualsExhaustiveOverTheFullTurnOnRandomCases) {
   EXPECT_GE(cases, 40);
 }
 
+TEST(GlobalSearch, OnAPoolTheSameOptimumAsOneQueue) {
+  // The queues on two threads against one queue on one: the same leaf. Cheap (no exhaustive
+  // search), so that the sanitizers' thread pass runs it (scripts/run_sanitizers.sh).
+  TaskPool pool(2);
+  const GmmMap map = testing::randomMap(29, testing::randomMapGeometry(), -2, -2, 4, 4, 0.8);
+  RasterOptions o;
+  o.chunk_shift = 5;
+  o.num_layers = 4;
+  const ChunkMap chunks = testing::rasterizeRandomMap(map, o);
+  std::mt19937 rng(31);
+  int cases = 0;
+  for (int c = 0; c < 12; ++c) {
+    const SearchWindow w = fullTurnWindow(rng, 10.0);
+    auto problem = SearchProblem::create(chunks, testing::randomPoints(rng, 150, 5.0), w);
+    if (!problem.ok()) continue;
+    GlobalSearchOptions one;
+    one.queues = 1;
+    const GlobalSearchOutcome a = globalBranchAndBound(problem.value(), one);
+    ASSERT_TRUE(a.complete) << "case " << c;
+    GlobalSearchOptions per_thread;  // queues 0: one per thread of the pool
+    per_thread.root_layer = c % 2 == 0 ? 2 : -1;
+    const GlobalSearchOutcome b = globalBranchAndBound(problem.value(), per_thread, &pool);
+    expectSame(a.best, b, c);
+    ++cases;
+  }
+  EXPECT_GE(cases, 8);
+}
+
 TEST(GlobalSearch, EqualScoresInSeveralQueuesGiveTheExhaustiveTieBreak) {
   // One or two points over a map of isolated cells: many poses share the best score, spread
   // over roots of different queues. Queues run in turn here (no pool), so a later queue always
