@@ -40,8 +40,9 @@ struct WindowPolicyOptions {
   /// An explicit pose whose covariance says it is coarser than the wide window (sigma_multiplier
   /// x sigma beyond wide_half_xy_m, or a heading sigma_multiplier x sigma of 90 deg or more) is
   /// searched over that extent, up to these (a rough fix, heading unknown): global localization
-  /// by the heading-interval search (global_search.h): 100 m x 100 m x 360 deg takes about
-  /// 0.5-3 s on the simulated town (docs/benchmarks.md), 25 m x 25 m a tenth of that.
+  /// by the heading-interval search (global_search.h): 100 m x 100 m x 360 deg took 1.7 s
+  /// median, up to 4.4 s, on one thread on the simulated town (0.8 / 2.5 s on two;
+  /// docs/benchmarks.md), and far longer on real scans over a partial map.
   double global_max_half_xy_m = 50.0;         ///< [m]
   double global_max_half_heading_rad = M_PI;  ///< [rad]
 
