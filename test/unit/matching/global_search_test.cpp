@@ -30,6 +30,19 @@ SearchWindow fullTurnWindow(std::mt19937& rng, double xy) {
   return SearchWindow::fromExtent(prior, 0.6 + 1.6 * u(rng), 0.6 + 1.6 * u(rng), 3.1416, 0.1, 0.2);
 }
 
+/// Chunks of 32 x 32 cells with 4 coarse layers, rasterized from a random map whose cells are
+/// empty with probability `empty_share`.
+ChunkMap randomChunks(uint32_t seed, double empty_share,
+                      int z_coarsening_period = RasterOptions().z_coarsening_period) {
+  const GmmMap map =
+      testing::randomMap(seed, testing::randomMapGeometry(), -2, -2, 4, 4, empty_share);
+  RasterOptions o;
+  o.chunk_shift = 5;
+  o.num_layers = 4;
+  o.z_coarsening_period = z_coarsening_period;
+  return testing::rasterizeRandomMap(map, o);
+}
+
 /// Brute force: the best exact score of the leaves of node (j0, hl, layer, tx, ty).
 int64_t bestLeaf(const SearchProblem& problem, int j0, int hl, int layer, int tx, int ty) {
   const SearchWindow& w = problem.window();
@@ -58,13 +71,7 @@ TEST(GlobalSearch, EqualsExhaustiveOverTheFullTurnOnRandomCases) {
   for (int coarsen : {0, 2}) {
     // Also a map of isolated cells with a few far points: optima then hinge on a swing.
     const bool sparse = coarsen == 0;
-    const GmmMap map =
-        testing::randomMap(7, testing::randomMapGeometry(), -2, -2, 4, 4, sparse ? 0.97 : 0.8);
-    RasterOptions o;
-    o.chunk_shift = 5;
-    o.num_layers = 4;
-    o.z_coarsening_period = coarsen;
-    const ChunkMap full = testing::rasterizeRandomMap(map, o);
+    const ChunkMap full = randomChunks(7, sparse ? 0.97 : 0.8, coarsen);
     std::mt19937 rng(300 + coarsen);
     std::uniform_real_distribution<double> u(0.0, 1.0);
     for (int c = 0; c < 30; ++c, ++cases) {
@@ -94,11 +101,7 @@ TEST(GlobalSearch, OnAPoolTheSameOptimumAsOneQueue) {
   // The queues on two threads against one queue on one: the same leaf. Cheap (no exhaustive
   // search), so that the sanitizers' thread pass runs it (scripts/run_sanitizers.sh).
   TaskPool pool(2);
-  const GmmMap map = testing::randomMap(29, testing::randomMapGeometry(), -2, -2, 4, 4, 0.8);
-  RasterOptions o;
-  o.chunk_shift = 5;
-  o.num_layers = 4;
-  const ChunkMap chunks = testing::rasterizeRandomMap(map, o);
+  const ChunkMap chunks = randomChunks(29, 0.8);
   std::mt19937 rng(31);
   int cases = 0;
   for (int c = 0; c < 12; ++c) {
@@ -122,12 +125,7 @@ TEST(GlobalSearch, EqualScoresInSeveralQueuesGiveTheExhaustiveTieBreak) {
   // One or two points over a map of isolated cells: many poses share the best score, spread
   // over roots of different queues. Queues run in turn here (no pool), so a later queue always
   // meets an incumbent equal to its own best and must not stop at it.
-  const GmmMap map = testing::randomMap(17, testing::randomMapGeometry(), -2, -2, 4, 4, 0.95);
-  RasterOptions o;
-  o.chunk_shift = 5;
-  o.num_layers = 4;
-  o.z_coarsening_period = 0;
-  const ChunkMap chunks = testing::rasterizeRandomMap(map, o);
+  const ChunkMap chunks = randomChunks(17, 0.95, 0);
   std::mt19937 rng(23);
   int cases = 0, tied = 0;
   for (int c = 0; c < 40; ++c) {
@@ -157,12 +155,7 @@ TEST(GlobalSearch, EqualScoresInSeveralQueuesGiveTheExhaustiveTieBreak) {
 
 TEST(GlobalSearch, IntervalBoundIsAtLeastEveryLeafBelowIt) {
   // A sparse map (92% empty cells), so that a bound missing part of a point's reach shows.
-  const GmmMap map = testing::randomMap(11, testing::randomMapGeometry(), -2, -2, 4, 4, 0.92);
-  RasterOptions o;
-  o.chunk_shift = 5;
-  o.num_layers = 4;
-  o.z_coarsening_period = 0;
-  const ChunkMap full = testing::rasterizeRandomMap(map, o);
+  const ChunkMap full = randomChunks(11, 0.92, 0);
   std::mt19937 rng(77);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   int64_t nodes = 0, tight = 0;
@@ -199,12 +192,7 @@ TEST(GlobalSearch, IntervalBoundCoversTheReachOfAFarPoint) {
   // One point 4-7 m out over a map of isolated cells (97% empty): the best leaf of a heading
   // interval is the one that swings the point onto a mapped cell, often far from where the
   // middle heading puts it, so a bound that under-estimates the swing fails here.
-  const GmmMap map = testing::randomMap(13, testing::randomMapGeometry(), -2, -2, 4, 4, 0.97);
-  RasterOptions o;
-  o.chunk_shift = 5;
-  o.num_layers = 4;
-  o.z_coarsening_period = 0;
-  const ChunkMap chunks = testing::rasterizeRandomMap(map, o);
+  const ChunkMap chunks = randomChunks(13, 0.97, 0);
   std::mt19937 rng(19);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   int64_t nodes = 0, scoring = 0;
@@ -234,11 +222,7 @@ TEST(GlobalSearch, IntervalBoundCoversTheReachOfAFarPoint) {
 }
 
 TEST(GlobalSearch, LeafBoundIsTheExactScore) {
-  const GmmMap map = testing::randomMap(3, testing::randomMapGeometry(), -2, -2, 4, 4, 0.3);
-  RasterOptions o;
-  o.chunk_shift = 5;
-  o.num_layers = 4;
-  const ChunkMap chunks = testing::rasterizeRandomMap(map, o);
+  const ChunkMap chunks = randomChunks(3, 0.3);
   std::mt19937 rng(5);
   const SearchWindow w = fullTurnWindow(rng, 6.0);
   auto problem = SearchProblem::create(chunks, testing::randomPoints(rng, 120, 5.0), w);
@@ -250,11 +234,7 @@ TEST(GlobalSearch, LeafBoundIsTheExactScore) {
 }
 
 TEST(GlobalSearch, BudgetStopsWithoutClaimingAnOptimum) {
-  const GmmMap map = testing::randomMap(9, testing::randomMapGeometry(), -2, -2, 4, 4, 0.3);
-  RasterOptions o;
-  o.chunk_shift = 5;
-  o.num_layers = 4;
-  const ChunkMap chunks = testing::rasterizeRandomMap(map, o);
+  const ChunkMap chunks = randomChunks(9, 0.3);
   std::mt19937 rng(8);
   const SearchWindow w = fullTurnWindow(rng, 6.0);
   auto problem = SearchProblem::create(chunks, testing::randomPoints(rng, 150, 5.0), w);
