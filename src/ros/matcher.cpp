@@ -71,6 +71,7 @@ Matcher::Matcher(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& nam
   initialpose_sub_ = nh_.subscribe("initialpose", 2, &Matcher::onInitialPose, this);
   chunk_sub_ = nh_.subscribe("map_chunks", 512, &Matcher::onChunk, this);
   index_sub_ = nh_.subscribe("map_index", 8, &Matcher::onIndex, this);
+  global_srv_ = nh_.advertiseService("global_localization", &Matcher::onGlobalLocalization, this);
 
   setupDiagnostics();
   worker_ = std::thread([this] { workerLoop(); });
@@ -85,6 +86,7 @@ Matcher::~Matcher() {
        {&scan_sub_, &odom_sub_, &posterior_sub_, &initialpose_sub_, &chunk_sub_, &index_sub_}) {
     sub->shutdown();
   }
+  global_srv_.shutdown();
   diagnostics_.reset();
   {
     std::lock_guard<std::mutex> lock(session_mutex_);

@@ -68,6 +68,25 @@ void Matcher::onInitialPose(const geometry_msgs::PoseWithCovarianceStamped::Cons
            window.half_heading_rad * 180.0 / M_PI);
 }
 
+bool Matcher::onGlobalLocalization(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+  std::string refused;
+  {
+    std::lock_guard<std::mutex> lock(session_mutex_);
+    refused = session_.requestGlobalSearch();
+  }
+  const LocalizationPolicyOptions& p = options_.policy;
+  res.success = refused.empty();
+  res.message = res.success ? "global search armed: +-" +
+                                  std::to_string(static_cast<int>(p.window.global_max_half_xy_m)) +
+                                  " m and +-" +
+                                  std::to_string(static_cast<int>(std::lround(
+                                      p.window.global_max_half_heading_rad * 180.0 / M_PI))) +
+                                  " deg around the current estimate from the next scan"
+                            : "global search refused: " + refused;
+  ROS_INFO("%s: %s", name_.c_str(), res.message.c_str());
+  return true;
+}
+
 void Matcher::onChunk(const ros::MessageEvent<const RasterChunk>& event) {
   const RasterChunk::ConstPtr msg = event.getConstMessage();
   std::string error;

@@ -59,6 +59,9 @@ RegistrationOptions loadRegistrationOptions(const ParamSource& parent) {
                                         ce.separation_depth_per_point, 0.0, 100.0);
   ce.max_evaluations = static_cast<int64_t>(
       param(nh, "certificate/max_evaluations", static_cast<int>(ce.max_evaluations), 1, 100000000));
+  ce.global_max_evaluations =
+      static_cast<int64_t>(param(nh, "certificate/global_max_evaluations",
+                                 static_cast<int>(ce.global_max_evaluations), 1, 1000000000));
   o.interval_search_min_headings =
       param(nh, "interval_search_min_headings", o.interval_search_min_headings, 1, 100000);
   GlobalSearchOptions& g = o.global;
@@ -67,6 +70,9 @@ RegistrationOptions loadRegistrationOptions(const ParamSource& parent) {
       param(nh, "global/max_points", static_cast<int>(g.max_points), 0, 1000000));
   g.max_evaluations = static_cast<int64_t>(
       param(nh, "global/max_evaluations", static_cast<int>(g.max_evaluations), 0, 1000000000));
+  g.confirm_half_xy_m = param(nh, "global/confirm_half_xy_m", g.confirm_half_xy_m, 0.01, 12.5);
+  g.confirm_half_heading_rad =
+      param(nh, "global/confirm_half_heading_rad", g.confirm_half_heading_rad, 0.001, 0.5);
   o.classify_obstacles = param(nh, "classify_obstacles", o.classify_obstacles);
   o.obstacles.mahalanobis_threshold =
       param(nh, "obstacles/mahalanobis_threshold", o.obstacles.mahalanobis_threshold, 0.0, 1000.0);
@@ -102,6 +108,8 @@ LocalizationPolicyOptions loadLocalizationPolicyOptions(const ParamSource& nh) {
   a.max_sigma_yaw_rad = param(nh, "acceptance/max_sigma_yaw_rad", a.max_sigma_yaw_rad, 0.0, 10.0);
   a.reject_on_window_edge = param(nh, "acceptance/reject_on_window_edge", a.reject_on_window_edge);
   a.require_certificate = param(nh, "acceptance/require_certificate", a.require_certificate);
+  a.require_certificate_wide =
+      param(nh, "acceptance/require_certificate_wide", a.require_certificate_wide);
   PoseCovariancePolicyOptions& c = o.covariance;
   c.use_search_covariance = param(nh, "covariance/use_search_covariance", c.use_search_covariance);
   c.search_covariance_scale =

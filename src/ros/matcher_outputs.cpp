@@ -65,6 +65,10 @@ void toStatusMsg(const MatchReport& r, const std::string& map_frame, double late
   msg.protection_xy_m = r.has_result ? safe(r.result.protection_xy_m) : 0.0;
   msg.protection_heading_rad = r.has_result ? safe(r.result.protection_heading_rad) : 0.0;
   msg.certificate_evaluations = r.has_result ? static_cast<uint64_t>(cert.evaluations) : 0;
+  msg.global_search = r.has_result && r.result.global;
+  msg.global_certified = msg.global_search && r.result.global_certificate.certified;
+  msg.global_separation_per_point =
+      msg.global_search ? safe(r.result.global_certificate.separation_per_point) : 0.0;
   msg.certificate_ms = 1e3 * safe(r.timing.certificate_s);
   msg.filter_ms = 1e3 * safe(r.timing.filter_s);
   msg.search_ms = 1e3 * safe(r.timing.search_s);

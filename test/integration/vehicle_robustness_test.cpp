@@ -3,8 +3,9 @@
 // time (vehicle_test_player.h) and breaks it on a schedule of bag times:
 //   [3.0, 5.5) s  IMU dropout             [7.0, 9.5) s  INS dropout (odometry + TF odom -> base)
 //   [10.5, 11.5) s scans in a frame TF does not know (missing TF)
-//   12.5 s         /initialpose 1 km away: the vehicle is off the map
-//   14.5 s         /initialpose back near the truth (clock held until the map is rasterized)
+//   12.5 s         the global_localization service (clock held while the global search runs)
+//   15.5 s         /initialpose 1 km away: the vehicle is off the map
+//   17.5 s         /initialpose back near the truth (clock held until the map is rasterized)
 // Each case must give a throttled log line and a diagnostic, the stack keeps running (EKF
 // odometry keeps coming, matching resumes), nothing non-finite is published, and the drive ends
 // localized within 0.3 m and 1 deg. The tests run in order on one running system.
@@ -13,6 +14,8 @@
 #include <algorithm>
 #include <cstdio>
 #include <memory>
+
+#include <std_srvs/Trigger.h>
 
 #include "vehicle_test_player.h"
 #include "vehicle_test_support.h"
@@ -26,7 +29,7 @@ using namespace vehicle_test;  // NOLINT: test code
 constexpr double kImuFrom = 3.0, kImuTo = 5.5;
 constexpr double kInsFrom = 7.0, kInsTo = 9.5;
 constexpr double kTfFrom = 10.5, kTfTo = 11.5;
-constexpr double kOffMapAt = 12.5, kBackAt = 14.5;
+constexpr double kGlobalAt = 12.5, kOffMapAt = 15.5, kBackAt = 17.5;
 constexpr double kTolXyM = 0.3, kTolYawRad = 1.0 * M_PI / 180.0;
 const char* kEkfInputs = "/localization/ekf: inputs";
 const char* kMatcherDiag = "/localization/matcher: scan matching";
@@ -187,7 +190,7 @@ TEST(VehicleRobustness, InsOdometryDropout) {
 }
 
 TEST(VehicleRobustness, MissingTransformOfTheCloudFrame) {
-  reach(kOffMapAt);
+  reach(kGlobalAt);
   const size_t skipped = countStatuses(kTfFrom, kTfTo, [](const MatchStatus& s) {
     return !s.accepted && s.reason.find("no transform from the cloud frame") != std::string::npos;
   });
@@ -199,8 +202,68 @@ TEST(VehicleRobustness, MissingTransformOfTheCloudFrame) {
       << "no log line for the missing transform";
   const std::string bad = outputs->diagnosticValue(kMatcherDiag, "malformed or empty clouds");
   EXPECT_FALSE(bad.empty() || bad == "0") << "matcher diagnostic: '" << bad << "'";
-  EXPECT_GE(countStatuses(kTfTo, kOffMapAt, [](const MatchStatus& s) { return s.accepted; }), 3u)
-      << describeStatuses(kTfTo, kOffMapAt);
+  EXPECT_GE(countStatuses(kTfTo, kGlobalAt, [](const MatchStatus& s) { return s.accepted; }), 3u)
+      << describeStatuses(kTfTo, kGlobalAt);
+}
+
+TEST(VehicleRobustness, GlobalLocalizationService) {
+  // Asked for by a person (or a supervisor): the next scan is searched over the global window
+  // (+-50 m, the full turn) around the estimate, and the result is taken only when certified.
+  const std::string service = "/localization/global_localization";
+  ASSERT_TRUE(ros::service::waitForService(service, 10000)) << service << " not advertised";
+  std_srvs::Trigger call;
+  ASSERT_TRUE(ros::service::call(service, call));
+  EXPECT_TRUE(call.response.success) << call.response.message;
+  EXPECT_NE(call.response.message.find("global search armed"), std::string::npos)
+      << call.response.message;
+  // Let scans through the merger to the matcher (0.1-0.2 s of sim time behind the player), then
+  // hold the clock while the search runs (seconds of wall time on one thread; a vehicle drops
+  // the scans meanwhile, counted).
+  reach(kGlobalAt + 0.6);
+  ros::WallDuration(0.3).sleep();
+  player->hold(true);
+  // Scans waiting in the matcher's queue when the call comes are searched globally too.
+  const double from = kGlobalAt - 0.5;
+  auto globalStatuses = [&] {
+    return countStatuses(from, kOffMapAt, [](const MatchStatus& s) { return s.global_search; });
+  };
+  const bool searched = waitFor([&] { return globalStatuses() > 0; }, 90.0);
+  player->hold(false);
+  ASSERT_TRUE(searched) << "no global search after the service call"
+                        << describeStatuses(from, kOffMapAt);
+  reach(kOffMapAt);
+  // Every accepted global match is certified and within its protection level of the truth, and
+  // the first global search relocalized the vehicle there.
+  size_t certified_accepted = 0;
+  outputs->locked([&] {
+    bool first = true;
+    for (const MatchStatus& s : outputs->statuses_) {
+      const double r = rel(s.header.stamp);
+      if (r < from || r >= kOffMapAt || !s.global_search) continue;
+      std::printf(
+          "[vehicle_robustness] global search at %.2f s: %s, certified %d (%s), global "
+          "proof %d, protection %.2f m, %.0f ms\n",
+          r, s.accepted ? "accepted" : s.reason.c_str(), s.certified, s.certificate_failure.c_str(),
+          s.global_certified, s.protection_xy_m, s.total_ms);
+      if (first) {
+        EXPECT_TRUE(s.accepted) << "the first global search: " << s.reason;
+        first = false;
+      }
+      if (!s.accepted) continue;
+      EXPECT_TRUE(s.certified && s.global_certified);
+      const PoseError e = poseError(player->truth(), s.header.stamp.toSec(), toPose(s.pose.pose));
+      EXPECT_TRUE(e.valid());
+      EXPECT_LE(e.xy_m, std::max(s.protection_xy_m, kTolXyM)) << "at " << r << " s";
+      certified_accepted += s.certified ? 1 : 0;
+    }
+    return 0;
+  });
+  EXPECT_GE(certified_accepted, 1u);
+  // Tracking resumes after it.
+  EXPECT_GE(countStatuses(kGlobalAt, kOffMapAt,
+                          [](const MatchStatus& s) { return s.accepted && !s.global_search; }),
+            3u)
+      << describeStatuses(kGlobalAt, kOffMapAt);
 }
 
 TEST(VehicleRobustness, VehicleOffTheMap) {

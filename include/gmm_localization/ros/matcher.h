@@ -24,6 +24,11 @@
 //   obstacles        sensor_msgs/PointCloud2 of obstacle points (obstacles_frame)  [on demand]
 //   scan_classified  sensor_msgs/PointCloud2, scan in map with mahalanobis + class [on demand]
 //   search_traversal sensor_msgs/Image, the branch-and-bound traversal (Fig. 9)   [on demand]
+// Service:
+//   global_localization  std_srvs/Trigger: search the global window (window/global_max_*, the
+//                    full turn) around the current estimate from the next scan until a match is
+//                    accepted (certified: acceptance/require_certificate_wide); refused with the
+//                    reason when there is no pose to search around
 // Diagnostics (matcher_diagnostics.cpp): "scan matching" and "<scan topic> topic status" (rate
 // and stamp age, diagnostics.h). Console lines naming the fix: no scans for 5 s (the topic and
 // the launch argument points_topic), scans but no pose to search around (/initialpose,
@@ -47,6 +52,7 @@
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
+#include <std_srvs/Trigger.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
 
@@ -82,6 +88,7 @@ class Matcher {
   void onOdom(const nav_msgs::Odometry::ConstPtr& msg);
   void onPosterior(const nav_msgs::Odometry::ConstPtr& msg);
   void onInitialPose(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg);
+  bool onGlobalLocalization(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
   // With the publisher: the client follows one map server and ignores the others.
   void onChunk(const ros::MessageEvent<const RasterChunk>& event);
   void onIndex(const ros::MessageEvent<const MapIndex>& event);
@@ -111,6 +118,7 @@ class Matcher {
   tf2_ros::TransformListener tf_listener_;
 
   ros::Subscriber scan_sub_, odom_sub_, posterior_sub_, initialpose_sub_, chunk_sub_, index_sub_;
+  ros::ServiceServer global_srv_;
   ros::Publisher pose_pub_, status_pub_, obstacles_pub_, classified_pub_, traversal_pub_;
   std::unique_ptr<Diagnostics> diagnostics_;
 

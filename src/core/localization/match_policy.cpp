@@ -161,7 +161,7 @@ SearchWindow discreteWindow(const MatchRequest& request, double heading_step_rad
 }
 
 AcceptanceDecision acceptMatch(const MatchResult& r, const SearchWindow& window,
-                               const AcceptancePolicyOptions& o) {
+                               const AcceptancePolicyOptions& o, bool wide) {
   AcceptanceDecision d;
   const Pose6& p = r.pose;
   if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) && std::isfinite(p.roll) &&
@@ -205,6 +205,12 @@ AcceptanceDecision acceptMatch(const MatchResult& r, const SearchWindow& window,
   }
   if (o.require_certificate && !r.certificate.certified) {
     d.reason = std::string("uncertified: ") + certificateFailureName(r.certificate.failure);
+    return d;
+  }
+  if (wide && o.require_certificate_wide && !r.certificate.certified &&
+      r.certificate.failure != CertificateFailure::kDisabled) {
+    d.reason = std::string("uncertified in a ") + (r.global ? "global" : "wide") +
+               " window: " + certificateFailureName(r.certificate.failure);
     return d;
   }
   d.accepted = true;

@@ -114,7 +114,8 @@ MatchReport MatchProcessor::process(const ChunkMap& map, ScanInput scan, const P
   r.correction_xy_m = std::hypot(m.pose.x - prior.pose.x, m.pose.y - prior.pose.y);
   r.correction_yaw_rad = wrap(m.pose.yaw - prior.pose.yaw);
 
-  const AcceptanceDecision d = acceptMatch(m, r.search_window, policy_.acceptance);
+  const AcceptanceDecision d =
+      acceptMatch(m, r.search_window, policy_.acceptance, prior.wide || prior.lost);
   if (!d.accepted) return finish(MatchOutcome::kRejected, d.reason);
   r.pose = m.pose;
   // A certificate switched off proves nothing either way: the covariance stays as it was.

@@ -83,6 +83,15 @@ Pose6 MatchSessionState::setInitialPose(const Pose6& pose, double stamp_s, bool 
   return full;
 }
 
+std::string MatchSessionState::requestGlobalSearch() {
+  if (tracker_.mode() == PriorMode::kNoPrior) {
+    return "no pose to search around yet: give one on /initialpose (a covariance of tens of "
+           "metres and an unknown heading searches the global window there)";
+  }
+  tracker_.requestRelocalization(/*global=*/true);
+  return {};
+}
+
 MatchStart MatchSessionState::beginMatch(const ScanInput& scan) const {
   MatchStart s;
   s.prior = tracker_.priorAt(scan.stamp_s, &odometry_);

@@ -135,6 +135,7 @@ void PriorTracker::setExplicitPose(const Pose6& pose, double stamp_s, PriorSourc
   explicit_source_ = source;
   explicit_z_known_ = z_known;
   relocalizing_ = true;
+  global_requested_ = false;  // a new pose to search around replaces a global request
   consecutive_rejections_ = 0;
 }
 
@@ -266,6 +267,8 @@ void PriorTracker::onAccepted(double stamp_s, const Pose6& pose,
     }
   }
   consecutive_rejections_ = 0;
+  // A match that started before the global search was asked for does not end it.
+  if (used.lost) global_requested_ = false;
   if (has_explicit_ && used.explicit_generation != explicit_generation_) return;
   has_explicit_ = false;
   relocalizing_ = false;
@@ -297,12 +300,13 @@ void PriorTracker::reset() {
   has_match_ = false;
   has_explicit_ = false;
   relocalizing_ = false;
+  global_requested_ = false;
   consecutive_rejections_ = 0;
 }
 
 bool PriorTracker::lost() const {
   const int n = options_.relocalization.lost_after_rejections;
-  return n > 0 && consecutive_rejections_ >= n;
+  return global_requested_ || (n > 0 && consecutive_rejections_ >= n);
 }
 
 PriorMode PriorTracker::mode() const {

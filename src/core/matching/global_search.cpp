@@ -8,28 +8,14 @@
 #include <utility>
 #include <vector>
 
-#include "search_node.h"
+#include "interval_node.h"
 
 namespace gmm_localization {
 namespace {
 
-/// A node: headings [j0, j0 + 2^heading_level), translations [tx, tx + 2^layer) per axis.
-struct IntervalNode {
-  int64_t bound;
-  int32_t j0;
-  int32_t ty;
-  int32_t tx;
-  int16_t layer;
-  int16_t heading_level;
-};
-
-/// Higher bound first; on equal bounds the smaller first-leaf key (j0, ty, tx) first.
-struct IntervalLower {
-  bool operator()(const IntervalNode& a, const IntervalNode& b) const {
-    if (a.bound != b.bound) return a.bound < b.bound;
-    return search_detail::keyLess(b.j0, b.ty, b.tx, a.j0, a.ty, a.tx);
-  }
-};
+using search_detail::IntervalCounts;
+using search_detail::IntervalLower;
+using search_detail::IntervalNode;
 
 int floorLog2(int64_t n) {
   return n <= 1 ? 0 : 63 - __builtin_clzll(static_cast<unsigned long long>(n));
@@ -79,6 +65,27 @@ double rangeCells(const CellPoint& p, const PriorCell& c) {
 
 }  // namespace
 
+namespace search_detail {
+
+int intervalRootLayer(const SearchProblem& problem, const GlobalSearchOptions& options) {
+  return options.root_layer < 0 ? problem.topLayer() : options.root_layer;
+}
+
+double typicalRangeCells(const SearchProblem& problem, const GlobalSearchOptions& options) {
+  const PriorCell prior = priorCell(problem);
+  std::vector<double> r;
+  for (const CellPoint& p : problem.points(problem.window().half_h)) {
+    r.push_back(rangeCells(p, prior));
+  }
+  if (r.empty()) return 0.0;
+  const size_t i =
+      std::min(r.size() - 1, static_cast<size_t>(options.typical_range_quantile * (r.size() - 1)));
+  std::nth_element(r.begin(), r.begin() + static_cast<std::ptrdiff_t>(i), r.end());
+  return r[i];
+}
+
+}  // namespace search_detail
+
 std::string GlobalSearchOptions::validate() const {
   if (root_heading_levels < 0 || root_heading_levels > 11) {
     return "root_heading_levels=" + std::to_string(root_heading_levels) + " must be in [0, 11]";
@@ -94,6 +101,12 @@ std::string GlobalSearchOptions::validate() const {
   }
   if (max_evaluations < 0) return "max_evaluations must be >= 0";
   if (queues < 0 || queues > 64) return "queues=" + std::to_string(queues) + " must be in [0, 64]";
+  if (!(confirm_half_xy_m > 0.0 && confirm_half_xy_m <= 12.5)) {
+    return "confirm_half_xy_m must be in (0, 12.5]";
+  }
+  if (!(confirm_half_heading_rad > 0.0 && confirm_half_heading_rad <= 0.5)) {
+    return "confirm_half_heading_rad must be in (0, 0.5]";
+  }
   if (max_reads_per_point < 1 || max_reads_per_point > 16) {
     return "max_reads_per_point=" + std::to_string(max_reads_per_point) + " must be in [1, 16]";
   }
@@ -223,10 +236,8 @@ struct SharedSearch {
 /// Best-first branch-and-bound over the roots r with r % queues == q.
 QueueResult searchQueue(const SearchProblem& problem, const GlobalSearchOptions& options,
                         double typical_range, int q, int queues, SharedSearch& shared) {
-  const SearchWindow& w = problem.window();
   const int max_layer = problem.map().options().num_layers;
-  const int root_layer = options.root_layer < 0 ? problem.topLayer() : options.root_layer;
-  const int root_hl = options.root_heading_levels;
+  const int root_layer = search_detail::intervalRootLayer(problem, options);
   QueueResult out;
   out.stats.evaluations_per_layer.assign(std::max(root_layer, max_layer) + 1, 0);
   auto count = [&](int layer) {
@@ -249,72 +260,31 @@ QueueResult searchQueue(const SearchProblem& problem, const GlobalSearchOptions&
     out.stats.queue_peak =
         std::max<int64_t>(out.stats.queue_peak, static_cast<int64_t>(queue.size()));
   };
-  const int stride = 1 << root_layer;
-  int64_t root = 0;
-  for (int j0 = 0; j0 < w.sizeH(); j0 += 1 << root_hl) {
-    for (int ty = 0; ty < w.sizeY(); ty += stride) {
-      for (int tx = 0; tx < w.sizeX(); tx += stride) {
-        if (root++ % queues != q) continue;
-        push({bound(j0, root_hl, root_layer, tx, ty), j0, ty, tx, static_cast<int16_t>(root_layer),
-              static_cast<int16_t>(root_hl)});
-      }
-    }
-  }
+  search_detail::forEachIntervalRoot(
+      problem, options, [&](int j0, int hl, int layer, int tx, int ty, int64_t index) {
+        if (index % queues != q) return;
+        push({bound(j0, hl, layer, tx, ty), j0, ty, tx, static_cast<int16_t>(layer),
+              static_cast<int16_t>(hl)});
+      });
 
+  IntervalCounts counts;
   while (!queue.empty()) {
     const IntervalNode n = queue.top();
     queue.pop();
     // Everything left is below a leaf another queue proved: nothing here can win.
     if (n.bound < shared.incumbent.load(std::memory_order_relaxed)) break;
-    if (n.layer == 0 && n.heading_level == 0) {
+    if (n.leaf()) {
       out.found = true;
       out.leaf = n;
       shared.raise(n.bound);
-      return out;
+      break;
     }
     if (shared.budget_hit.load(std::memory_order_relaxed)) break;
-    bool split_heading = n.layer == 0;
-    if (n.heading_level > 0 && n.layer > 0) {
-      const double half_interval = (1 << (n.heading_level - 1)) * w.heading_step_rad;
-      split_heading = typical_range * half_interval >= options.heading_split_share * (1 << n.layer);
-    }
-    if (n.heading_level > 0 && split_heading) {
-      ++out.heading_splits;
-      const int hl = n.heading_level - 1;
-      for (int half = 0; half < 2; ++half) {
-        const int j0 = n.j0 + half * (1 << hl);
-        if (j0 >= w.sizeH()) break;
-        push({bound(j0, hl, n.layer, n.tx, n.ty), j0, n.ty, n.tx, n.layer,
-              static_cast<int16_t>(hl)});
-      }
-      continue;
-    }
-    ++out.translation_splits;
-    const int child = n.layer - 1;
-    const int h = 1 << child;
-    int64_t quad[4];
-    const bool exact_layer = n.heading_level == 0 && child <= max_layer;
-    if (exact_layer) {
-      problem.scoreQuad(n.j0, child, n.tx, n.ty, h, quad);
-      out.point_lookups += 4 * static_cast<int64_t>(problem.points(n.j0).size());
-    }
-    for (int dy = 0; dy < 2; ++dy) {
-      const int ty = n.ty + dy * h;
-      if (ty >= w.sizeY()) break;
-      for (int dx = 0; dx < 2; ++dx) {
-        const int tx = n.tx + dx * h;
-        if (tx >= w.sizeX()) break;
-        int64_t s;
-        if (exact_layer) {
-          count(child);
-          s = quad[dy * 2 + dx];
-        } else {
-          s = bound(n.j0, n.heading_level, child, tx, ty);
-        }
-        push({s, n.j0, ty, tx, static_cast<int16_t>(child), n.heading_level});
-      }
-    }
+    search_detail::expandInterval(problem, options, typical_range, n, bound, count, push, counts);
   }
+  out.heading_splits += counts.heading_splits;
+  out.translation_splits += counts.translation_splits;
+  out.point_lookups += counts.point_lookups;
   return out;
 }
 
@@ -324,26 +294,14 @@ GlobalSearchOutcome globalBranchAndBound(const SearchProblem& problem,
                                          const GlobalSearchOptions& options, TaskPool* pool) {
   const SearchWindow& w = problem.window();
   const int max_layer = problem.map().options().num_layers;
-  const int root_layer = options.root_layer < 0 ? problem.topLayer() : options.root_layer;
+  const int root_layer = search_detail::intervalRootLayer(problem, options);
   GlobalSearchOutcome out;
   SearchStats stats;
   stats.exhaustive_poses = w.poses();
   stats.top_layer = root_layer;
   stats.evaluations_per_layer.assign(std::max(root_layer, max_layer) + 1, 0);
 
-  // The typical point's range [cells], deciding which axis a node splits (any choice is exact).
-  double typical_range = 0.0;
-  {
-    const PriorCell prior = priorCell(problem);
-    std::vector<double> r;
-    for (const CellPoint& p : problem.points(w.half_h)) r.push_back(rangeCells(p, prior));
-    if (!r.empty()) {
-      const size_t i = std::min(
-          r.size() - 1, static_cast<size_t>(options.typical_range_quantile * (r.size() - 1)));
-      std::nth_element(r.begin(), r.begin() + static_cast<std::ptrdiff_t>(i), r.end());
-      typical_range = r[i];
-    }
-  }
+  const double typical_range = search_detail::typicalRangeCells(problem, options);
 
   SharedSearch shared;
   int64_t prior_score = -1;

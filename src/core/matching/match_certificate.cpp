@@ -5,6 +5,7 @@
 #include <queue>
 #include <vector>
 
+#include "certificate_geometry.h"
 #include "search_node.h"
 
 namespace gmm_localization {
@@ -23,6 +24,7 @@ std::string CertificateOptions::validate() const {
     return "separation_depth_per_point must be in [margin_per_point, 100)";
   }
   if (max_evaluations < 1) return "max_evaluations must be >= 1";
+  if (global_max_evaluations < 1) return "global_max_evaluations must be >= 1";
   return {};
 }
 
@@ -38,8 +40,6 @@ const char* certificateFailureName(CertificateFailure failure) {
       return "window_edge";
     case CertificateFailure::kBudget:
       return "budget";
-    case CertificateFailure::kGlobalSearch:
-      return "global_search";
   }
   return "unknown";
 }
@@ -49,47 +49,18 @@ namespace {
 using search_detail::Lower;
 using search_detail::Node;
 
-/// Where a node's block lies relative to the optimum, the exclusion zone and the window border.
+/// The geometry of a node (one heading).
 class Geometry {
  public:
+  using Extent = search_detail::CertificateGeometry::Extent;
   Geometry(const SearchProblem& problem, const SearchOutcome& optimum, const CertificateOptions& o)
-      : w_(problem.window()),
-        res_(problem.map().geometry().resolution_m),
-        ox_(optimum.tx),
-        oy_(optimum.ty),
-        oj_(optimum.heading_index),
-        r_xy_(o.exclusion_radius_m),
-        r_h_(o.exclusion_heading_rad) {}
-
-  struct Extent {
-    double max_xy_m;     ///< farthest x-y distance of a pose of the block from the optimum
-    double heading_rad;  ///< heading distance (one heading per node)
-    bool inside;         ///< every pose of the block is inside the exclusion zone
-    bool border;         ///< the block holds a pose on the window's border
-  };
-
+      : g_(problem, optimum, o) {}
   Extent of(const Node& n) const {
-    const int size = 1 << n.layer;
-    const int tx1 = std::min(n.tx + size - 1, w_.sizeX() - 1);
-    const int ty1 = std::min(n.ty + size - 1, w_.sizeY() - 1);
-    const double dx = std::max(std::abs(n.tx - ox_), std::abs(tx1 - ox_)) * res_;
-    const double dy = std::max(std::abs(n.ty - oy_), std::abs(ty1 - oy_)) * res_;
-    Extent e;
-    e.max_xy_m = std::hypot(dx, dy);
-    e.heading_rad = std::abs(n.heading_index - oj_) * w_.heading_step_rad;
-    e.inside = e.max_xy_m <= r_xy_ && e.heading_rad <= r_h_;
-    // An axis with one value is not searched: its border is not a border of the set.
-    e.border = (w_.sizeX() > 1 && (n.tx == 0 || tx1 == w_.sizeX() - 1)) ||
-               (w_.sizeY() > 1 && (n.ty == 0 || ty1 == w_.sizeY() - 1)) ||
-               (w_.sizeH() > 1 && (n.heading_index == 0 || n.heading_index == w_.sizeH() - 1));
-    return e;
+    return g_.of(n.tx, n.ty, n.layer, n.heading_index, n.heading_index);
   }
 
  private:
-  const SearchWindow& w_;
-  double res_;
-  int ox_, oy_, oj_;
-  double r_xy_, r_h_;
+  search_detail::CertificateGeometry g_;
 };
 
 }  // namespace

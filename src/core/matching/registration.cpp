@@ -255,6 +255,73 @@ RegistrationResult<MatchResult> Registration::finish(
     const ChunkMap& map, const PointList& base_points, const MatchRequest& request,
     PreparedSearch prepared, const SearchOutcome& search, const std::function<double()>& now,
     RegistrationTiming* timing) const {
+  if (prepared.problem.window().sizeH() >= options_.interval_search_min_headings) {
+    return finishGlobal(map, base_points, request, std::move(prepared), search, now, timing);
+  }
+  return finishLocal(map, base_points, request, std::move(prepared), search, now, timing);
+}
+
+RegistrationResult<MatchResult> Registration::finishGlobal(
+    const ChunkMap& map, const PointList& base_points, const MatchRequest& request,
+    PreparedSearch prepared, const SearchOutcome& search, const std::function<double()>& now,
+    RegistrationTiming* timing) const {
+  using R = RegistrationResult<MatchResult>;
+  auto tick = [&]() { return now ? now() : 0.0; };
+  const double t0 = tick();
+  MatchCertificate global_certificate;
+  if (options_.certificate.enabled) {
+    global_certificate = certifyGlobalOptimum(prepared.problem, search, options_.certificate,
+                                              options_.global, pool_.get());
+  }
+  const double t1 = tick();
+  // The confirming search: the tracking search around the global optimum, on all points.
+  MatchRequest confirm = request;
+  confirm.prior.x = search.pose.x;
+  confirm.prior.y = search.pose.y;
+  confirm.prior.yaw = search.pose.yaw;
+  confirm.half_x_m = confirm.half_y_m = options_.global.confirm_half_xy_m;
+  confirm.half_heading_rad = options_.global.confirm_half_heading_rad;
+  auto local = prepare(map, base_points, confirm);
+  if (!local.ok()) return R::failure(local.errorKind(), "confirming search: " + local.error());
+  const SearchOutcome confirm_search = this->search(local->problem, nullptr);
+  const double t2 = tick();
+  auto r =
+      finishLocal(map, base_points, confirm, std::move(local.value()), confirm_search, now, timing);
+  if (!r.ok()) return r;
+  if (timing) {
+    timing->search_s += t2 - t1;
+    timing->certificate_s += t1 - t0;
+  }
+  MatchResult& out = r.value();
+  out.global = true;
+  out.confirm_search = out.search;
+  out.global_certificate = global_certificate;
+  out.search = search;
+  out.search.stats.evaluations += out.confirm_search.stats.evaluations;
+  MatchCertificate& c = out.certificate;
+  if (!global_certificate.certified && c.failure != CertificateFailure::kDisabled) {
+    c.certified = false;
+    c.failure = global_certificate.failure;
+  }
+  c.evaluations += global_certificate.evaluations;
+  // Every plausible pose of the global proof lies within its protection of the global
+  // optimum, which lies a cell's diagonal and a heading step from the grid (as for the
+  // confirming search), and the published pose this far from it.
+  const double res = map.geometry().resolution_m;
+  const double step = prepared.problem.window().heading_step_rad;
+  out.protection_xy_m = std::max(
+      out.protection_xy_m, global_certificate.protection_xy_m + res * std::sqrt(2.0) +
+                               std::hypot(out.pose.x - search.pose.x, out.pose.y - search.pose.y));
+  out.protection_heading_rad =
+      std::max(out.protection_heading_rad, global_certificate.protection_heading_rad + step +
+                                               std::abs(wrapAngle(out.pose.yaw - search.pose.yaw)));
+  return r;
+}
+
+RegistrationResult<MatchResult> Registration::finishLocal(
+    const ChunkMap& map, const PointList& base_points, const MatchRequest& request,
+    PreparedSearch prepared, const SearchOutcome& search, const std::function<double()>& now,
+    RegistrationTiming* timing) const {
   using R = RegistrationResult<MatchResult>;
   auto tick = [&]() { return now ? now() : 0.0; };
   const double t2 = tick();
@@ -292,13 +359,7 @@ RegistrationResult<MatchResult> Registration::finish(
   out.covariance_xyh = out.covariance_detail.covariance;
   const double t3c = tick();
   if (timing) timing->covariance_s = t3c - t3;
-  if (options_.certificate.enabled &&
-      prepared.problem.window().sizeH() >= options_.interval_search_min_headings) {
-    out.certificate.failure = CertificateFailure::kGlobalSearch;  // uncertified: see the enum
-  } else {
-    out.certificate =
-        certifyOptimum(prepared.problem, out.search, options_.certificate, pool_.get());
-  }
+  out.certificate = certifyOptimum(prepared.problem, out.search, options_.certificate, pool_.get());
   {
     const double res = map.geometry().resolution_m;
     const double step = prepared.problem.window().heading_step_rad;

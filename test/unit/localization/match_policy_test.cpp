@@ -136,6 +136,23 @@ TEST(AcceptMatch, EachRuleRejectsWithItsReason) {
   r.certificate.certified = true;
   r.certificate.failure = CertificateFailure::kNone;
   EXPECT_TRUE(acceptMatch(r, window10(), strict).accepted);
+
+  // A wide or global window (a jump from the tracked pose) needs the certificate by default.
+  r.certificate.certified = false;
+  r.certificate.failure = CertificateFailure::kBudget;
+  d = acceptMatch(r, window10(), o, /*wide=*/true);
+  EXPECT_FALSE(d.accepted);
+  EXPECT_EQ(d.reason, "uncertified in a wide window: budget");
+  r.global = true;
+  EXPECT_EQ(acceptMatch(r, window10(), o, true).reason, "uncertified in a global window: budget");
+  AcceptancePolicyOptions lenient = o;
+  lenient.require_certificate_wide = false;
+  EXPECT_TRUE(acceptMatch(r, window10(), lenient, true).accepted);
+  r.certificate.failure = CertificateFailure::kDisabled;  // no proof asked for: not applied
+  EXPECT_TRUE(acceptMatch(r, window10(), o, true).accepted);
+  r.certificate.certified = true;
+  r.certificate.failure = CertificateFailure::kNone;
+  EXPECT_TRUE(acceptMatch(r, window10(), o, true).accepted);
 }
 
 bool spd(const Matrix6d& c) {

@@ -370,6 +370,41 @@ TEST(MatchSession, RejectionsInARowMakeTheLocalizationLostAndSearchTheGlobalWind
   EXPECT_FALSE(s.beginMatch(a).prior.lost);
 }
 
+TEST(MatchSession, AGlobalSearchRequestedSearchesTheGlobalWindowUntilAMatchOfItIsAccepted) {
+  LocalizationPolicyOptions policy;
+  policy.window.global_max_half_xy_m = 40.0;
+  Session s(MatchSessionOptions(), policy);
+  EXPECT_NE(s.requestGlobalSearch().find("no pose to search around"), std::string::npos);
+  s.setConfiguredPose(poseAt(5.0, 5.0, 0.0), true);
+  const ScanInput a = scanAt(10.0);
+  MatchStart start = s.beginMatch(a);
+  MatchReport r = acceptedReport(a, start, 0.0, 0.0);
+  ASSERT_TRUE(s.finishMatch(start.epoch, &r));
+  const MatchStart before = s.beginMatch(a);  // a match under way when the request comes
+  EXPECT_FALSE(before.prior.lost);
+  EXPECT_EQ(s.requestGlobalSearch(), "");
+  EXPECT_EQ(s.tracker().mode(), PriorMode::kLost);
+  start = s.beginMatch(a);
+  EXPECT_TRUE(start.prior.lost);
+  EXPECT_DOUBLE_EQ(start.prior.wide_window.half_x_m, 40.0);
+  // The match that started before does not end it; a rejected global one neither.
+  r = acceptedReport(a, before, 0.1, 0.0);
+  ASSERT_TRUE(s.finishMatch(before.epoch, &r));
+  EXPECT_TRUE(s.beginMatch(a).prior.lost);
+  MatchReport rejected = reportWith(a, start, MatchOutcome::kRejected);
+  ASSERT_TRUE(s.finishMatch(start.epoch, &rejected));
+  start = s.beginMatch(a);
+  EXPECT_TRUE(start.prior.lost);
+  r = acceptedReport(a, start, 0.2, 0.0);
+  ASSERT_TRUE(s.finishMatch(start.epoch, &r));
+  EXPECT_EQ(s.tracker().mode(), PriorMode::kTracking);
+  EXPECT_FALSE(s.beginMatch(a).prior.lost);
+  // A new pose to search around replaces the request.
+  EXPECT_EQ(s.requestGlobalSearch(), "");
+  s.setConfiguredPose(poseAt(9.0, 5.0, 0.0), true);
+  EXPECT_FALSE(s.beginMatch(a).prior.lost);
+}
+
 TEST(MatchSession, TheMatchStartsWithTheDeskewTwistWhenConfigured) {
   MatchSessionOptions o;
   Session s(o, LocalizationPolicyOptions());

@@ -12,36 +12,12 @@
 
 #include <gtest/gtest.h>
 
-#include "support/random_chunk_map.h"
-#include "support/random_map.h"
+#include "support/full_turn_cases.h"
 
 namespace gmm_localization {
 namespace {
 
-/// A full-turn window (heading step 0.1 rad: 63 headings) of half extent 0.6-2.2 m around a
-/// random prior in [-xy, xy]^2.
-SearchWindow fullTurnWindow(std::mt19937& rng, double xy) {
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  Pose6 prior;
-  prior.x = -xy + 2.0 * xy * u(rng);
-  prior.y = -xy + 2.0 * xy * u(rng);
-  prior.z = u(rng);
-  prior.yaw = 6.28 * u(rng);
-  return SearchWindow::fromExtent(prior, 0.6 + 1.6 * u(rng), 0.6 + 1.6 * u(rng), 3.1416, 0.1, 0.2);
-}
-
-/// Chunks of 32 x 32 cells with 4 coarse layers, rasterized from a random map whose cells are
-/// empty with probability `empty_share`.
-ChunkMap randomChunks(uint32_t seed, double empty_share,
-                      int z_coarsening_period = RasterOptions().z_coarsening_period) {
-  const GmmMap map =
-      testing::randomMap(seed, testing::randomMapGeometry(), -2, -2, 4, 4, empty_share);
-  RasterOptions o;
-  o.chunk_shift = 5;
-  o.num_layers = 4;
-  o.z_coarsening_period = z_coarsening_period;
-  return testing::rasterizeRandomMap(map, o);
-}
+using testing::fullTurnWindow;
 
 /// Brute force: the best exact score of the leaves of node (j0, hl, layer, tx, ty).
 int64_t bestLeaf(const SearchProblem& problem, int j0, int hl, int layer, int tx, int ty) {
@@ -71,7 +47,7 @@ TEST(GlobalSearch, EqualsExhaustiveOverTheFullTurnOnRandomCases) {
   for (int coarsen : {0, 2}) {
     // Also a map of isolated cells with a few far points: optima then hinge on a swing.
     const bool sparse = coarsen == 0;
-    const ChunkMap full = randomChunks(7, sparse ? 0.97 : 0.8, coarsen);
+    const ChunkMap full = testing::smallRandomChunks(7, sparse ? 0.97 : 0.8, coarsen);
     std::mt19937 rng(300 + coarsen);
     std::uniform_real_distribution<double> u(0.0, 1.0);
     for (int c = 0; c < 30; ++c, ++cases) {
@@ -101,7 +77,7 @@ TEST(GlobalSearch, OnAPoolTheSameOptimumAsOneQueue) {
   // The queues on two threads against one queue on one: the same leaf. Cheap (no exhaustive
   // search), so that the sanitizers' thread pass runs it (scripts/run_sanitizers.sh).
   TaskPool pool(2);
-  const ChunkMap chunks = randomChunks(29, 0.8);
+  const ChunkMap chunks = testing::smallRandomChunks(29, 0.8);
   std::mt19937 rng(31);
   int cases = 0;
   for (int c = 0; c < 12; ++c) {
@@ -125,7 +101,7 @@ TEST(GlobalSearch, EqualScoresInSeveralQueuesGiveTheExhaustiveTieBreak) {
   // One or two points over a map of isolated cells: many poses share the best score, spread
   // over roots of different queues. Queues run in turn here (no pool), so a later queue always
   // meets an incumbent equal to its own best and must not stop at it.
-  const ChunkMap chunks = randomChunks(17, 0.95, 0);
+  const ChunkMap chunks = testing::smallRandomChunks(17, 0.95, 0);
   std::mt19937 rng(23);
   int cases = 0, tied = 0;
   for (int c = 0; c < 40; ++c) {
@@ -155,7 +131,7 @@ TEST(GlobalSearch, EqualScoresInSeveralQueuesGiveTheExhaustiveTieBreak) {
 
 TEST(GlobalSearch, IntervalBoundIsAtLeastEveryLeafBelowIt) {
   // A sparse map (92% empty cells), so that a bound missing part of a point's reach shows.
-  const ChunkMap full = randomChunks(11, 0.92, 0);
+  const ChunkMap full = testing::smallRandomChunks(11, 0.92, 0);
   std::mt19937 rng(77);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   int64_t nodes = 0, tight = 0;
@@ -192,7 +168,7 @@ TEST(GlobalSearch, IntervalBoundCoversTheReachOfAFarPoint) {
   // One point 4-7 m out over a map of isolated cells (97% empty): the best leaf of a heading
   // interval is the one that swings the point onto a mapped cell, often far from where the
   // middle heading puts it, so a bound that under-estimates the swing fails here.
-  const ChunkMap chunks = randomChunks(13, 0.97, 0);
+  const ChunkMap chunks = testing::smallRandomChunks(13, 0.97, 0);
   std::mt19937 rng(19);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   int64_t nodes = 0, scoring = 0;
@@ -222,7 +198,7 @@ TEST(GlobalSearch, IntervalBoundCoversTheReachOfAFarPoint) {
 }
 
 TEST(GlobalSearch, LeafBoundIsTheExactScore) {
-  const ChunkMap chunks = randomChunks(3, 0.3);
+  const ChunkMap chunks = testing::smallRandomChunks(3, 0.3);
   std::mt19937 rng(5);
   const SearchWindow w = fullTurnWindow(rng, 6.0);
   auto problem = SearchProblem::create(chunks, testing::randomPoints(rng, 120, 5.0), w);
@@ -234,7 +210,7 @@ TEST(GlobalSearch, LeafBoundIsTheExactScore) {
 }
 
 TEST(GlobalSearch, BudgetStopsWithoutClaimingAnOptimum) {
-  const ChunkMap chunks = randomChunks(9, 0.3);
+  const ChunkMap chunks = testing::smallRandomChunks(9, 0.3);
   std::mt19937 rng(8);
   const SearchWindow w = fullTurnWindow(rng, 6.0);
   auto problem = SearchProblem::create(chunks, testing::randomPoints(rng, 150, 5.0), w);

@@ -40,7 +40,6 @@ inline ChunkMap rasterizeRandomMap(const GmmMap& map, const RasterOptions& optio
   return chunks;
 }
 
-/// n points uniform in x, y in [-radius, radius] [m] and z in [-1.8, 4) m.
 /// The chunks of `full` (cx, cy in -4..3) without a seeded random share of them: a map whose
 /// loaded region has holes and edges, where a block may start in a missing chunk and reach
 /// into a loaded one.
@@ -57,6 +56,7 @@ inline ChunkMap withoutSomeChunks(const ChunkMap& full, uint32_t seed, double dr
   return out;
 }
 
+/// n points uniform in x, y in [-radius, radius] [m] and z in [-1.8, 4) m.
 inline PointList randomPoints(std::mt19937& rng, int n, double radius) {
   std::uniform_real_distribution<double> u(-radius, radius);
   std::uniform_real_distribution<double> z(-1.8, 4.0);

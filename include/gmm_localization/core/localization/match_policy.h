@@ -71,6 +71,11 @@ struct AcceptancePolicyOptions {
   /// of the window scores within the margin, or the proof ran out of budget). false: publish
   /// it with the uncertified covariance floors below (the EKF then weighs it little).
   bool require_certificate = false;
+  /// Reject an uncertified match of a wide window (explicit pose, relocalization, stale
+  /// estimate) or a global one (lost, a coarse /initialpose): a jump away from the tracked
+  /// pose is taken only on a proof that nothing else in the window explains the scan as well
+  /// (certificates switched off: not applied). Tracking matches follow require_certificate.
+  bool require_certificate_wide = true;
 
   std::string validate() const;
 };
@@ -203,10 +208,10 @@ struct AcceptanceDecision {
 };
 
 /// Applies the acceptance rules in the order: finite result, map coverage, log-likelihood per
-/// point, search covariance, window edge, certificate (when required). `window` is discreteWindow()
-/// of the request.
+/// point, search covariance, window edge, certificate (when required; `wide`: the prior was
+/// wide or lost, see require_certificate_wide). `window` is discreteWindow() of the request.
 AcceptanceDecision acceptMatch(const MatchResult& result, const SearchWindow& window,
-                               const AcceptancePolicyOptions& options);
+                               const AcceptancePolicyOptions& options, bool wide = false);
 
 /// The 6x6 covariance published with a match: the (x, y, yaw) block from the search
 /// covariance (scaled) or the fixed sigmas, floored; z, roll, pitch from the fixed sigmas; no

@@ -107,6 +107,11 @@ class MatchSessionState {
                        const Eigen::Matrix3d* covariance_xyh = nullptr,
                        WindowExtent* window_out = nullptr);
 
+  /// The global search from the next scan on (the matcher's global_localization service): the
+  /// global window (WindowPolicyOptions::global_max_*) around the current prior until a match
+  /// is accepted. Empty when armed, else why not (no pose to search around).
+  std::string requestGlobalSearch();
+
   /// The prior, deskew twist and epoch for this scan's match.
   MatchStart beginMatch(const ScanInput& scan) const;
   /// The deskew twist for this scan (none when deskew is off or no twist is known).

@@ -115,8 +115,12 @@ class PriorTracker {
   /// given one, unknown.
   Pose6 completePlanarPose(const Pose6& planar, const OdometryBuffer* odometry,
                            bool* z_known) const;
-  /// Search the wide window until a match is accepted.
-  void requestRelocalization() { relocalizing_ = true; }
+  /// Search the wide window until a match is accepted; `global`: the global window
+  /// (WindowPolicyOptions::global_max_*, as when lost) around the prior, from the next scan.
+  void requestRelocalization(bool global = false) {
+    relocalizing_ = true;
+    global_requested_ = global_requested_ || global;
+  }
 
   /// The prior for a scan stamped scan_stamp_s; odometry may be null (then estimates are carried
   /// with their own twist at constant velocity).
@@ -138,7 +142,8 @@ class PriorTracker {
   size_t historySize() const { return history_.size(); }
 
   PriorMode mode() const;
-  /// RelocalizationPolicyOptions::lost_after_rejections rejected matches in a row.
+  /// RelocalizationPolicyOptions::lost_after_rejections rejected matches in a row, or a global
+  /// search requested (requestRelocalization(true)) and no match accepted since.
   bool lost() const;
   int consecutiveRejections() const { return consecutive_rejections_; }
   bool hasPosterior() const { return has_posterior_; }
@@ -169,6 +174,7 @@ class PriorTracker {
   uint64_t explicit_generation_ = 0;
   WindowExtent explicit_window_;
   bool relocalizing_ = false;
+  bool global_requested_ = false;
   int consecutive_rejections_ = 0;
 };
 

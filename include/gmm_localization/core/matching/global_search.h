@@ -86,6 +86,11 @@ struct GlobalSearchOptions {
   /// without). The optimum does not depend on it; the work does: queues run in turn without a
   /// pool, and a queue run first without the others' incumbent expands more than one queue.
   int queues = 0;
+  /// After the global optimum (on max_points points), Registration searches this window
+  /// around it on all the scan's points (the tracking search) and refines from there: the
+  /// published pose, its covariance and its local certificate come from that search [m], [rad].
+  double confirm_half_xy_m = 2.0;
+  double confirm_half_heading_rad = 0.0524;  ///< 3 deg
 
   std::string validate() const;
 };

@@ -50,6 +50,9 @@ struct CertificateOptions {
   double separation_depth_per_point = 0.1;
   /// Node scores the certificate may compute (all layers); beyond it: not certified.
   int64_t max_evaluations = 3000;
+  /// The same for the certificate of a global search (global_certificate.h), whose nodes span
+  /// heading intervals over a window thousands of times larger.
+  int64_t global_max_evaluations = 200000;
 
   std::string validate() const;
 };
@@ -61,9 +64,6 @@ enum class CertificateFailure {
   kAmbiguous,   ///< a plausible pose lies outside the exclusion zone
   kWindowEdge,  ///< a plausible pose lies on the window's border
   kBudget,      ///< max_evaluations reached before the proof completed
-  /// Not attempted: the window was searched globally (heading intervals, global_search.h),
-  /// where the proof would cost as much as the search; the next (tracking) match certifies.
-  kGlobalSearch,
 };
 const char* certificateFailureName(CertificateFailure failure);  ///< "", "ambiguous", ...
 

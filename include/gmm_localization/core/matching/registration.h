@@ -13,6 +13,7 @@
 
 #include "gmm_localization/core/common/result.h"
 #include "gmm_localization/core/common/task_pool.h"
+#include "gmm_localization/core/matching/global_certificate.h"
 #include "gmm_localization/core/matching/global_search.h"
 #include "gmm_localization/core/matching/grid_search.h"
 #include "gmm_localization/core/matching/hill_climb.h"
@@ -88,6 +89,16 @@ struct MatchResult {
   double map_coverage = 0.0;              ///< share of search points over non-empty cells
   double log_likelihood_per_point = 0.0;  ///< exact, at the result [nats]
   ObstacleLabels obstacles;               ///< one label per input point (when enabled)
+  /// After a global search (windows of interval_search_min_headings headings or more):
+  /// `search` is the global optimum (its evaluations include the confirming search's);
+  /// `confirm_search` the search of GlobalSearchOptions::confirm_half_* around it on all points,
+  /// from which the pose, the covariance and the protection level come; `global_certificate`
+  /// the proof over the whole window (global_certificate.h). `certificate` is then certified
+  /// only when both proofs are (its failure the global one's first), with the confirming
+  /// search's separation.
+  bool global = false;
+  SearchOutcome confirm_search;
+  MatchCertificate global_certificate;
 };
 
 /// Stage durations [s], filled when the caller supplies a clock (the core reads none itself).
@@ -167,7 +178,9 @@ class Registration {
   /// `complete` is false only when the interval search stopped at its node budget.
   SearchOutcome search(const SearchProblem& problem, std::vector<TraversalNode>* traversal,
                        bool* complete = nullptr) const;
-  /// Refinement, covariance, coverage check and obstacles after a search of `prepared`.
+  /// Refinement, covariance, certificate, coverage check and obstacles after a search of
+  /// `prepared`; after a global search, first its certificate and the confirming search
+  /// (MatchResult::global).
   RegistrationResult<MatchResult> finish(const ChunkMap& map, const PointList& base_points,
                                          const MatchRequest& request, PreparedSearch prepared,
                                          const SearchOutcome& search,
@@ -175,6 +188,17 @@ class Registration {
                                          RegistrationTiming* timing) const;
 
  private:
+  RegistrationResult<MatchResult> finishLocal(const ChunkMap& map, const PointList& base_points,
+                                              const MatchRequest& request, PreparedSearch prepared,
+                                              const SearchOutcome& search,
+                                              const std::function<double()>& now,
+                                              RegistrationTiming* timing) const;
+  RegistrationResult<MatchResult> finishGlobal(const ChunkMap& map, const PointList& base_points,
+                                               const MatchRequest& request, PreparedSearch prepared,
+                                               const SearchOutcome& search,
+                                               const std::function<double()>& now,
+                                               RegistrationTiming* timing) const;
+
   RegistrationOptions options_;
   std::shared_ptr<TaskPool> pool_;
 };
