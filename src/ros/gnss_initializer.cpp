@@ -177,7 +177,11 @@ void GnssInitializer::onFix(const sensor_msgs::NavSatFix::ConstPtr& msg) {
   std::lock_guard<std::mutex> lock(mutex_);
   ++fixes_;
   last_fix_wall_s_ = wallNow();
-  if (state_ == State::kSent && (ros::Time::now() - sent_at_).toSec() > options_.retry_s) {
+  const ros::Time now = ros::Time::now();
+  // A pose sent before the clock ran (use_sim_time, no /clock yet) waits retry_s from the
+  // clock's start, not from 0.
+  if (state_ == State::kSent && sent_at_.isZero()) sent_at_ = now;
+  if (state_ == State::kSent && (now - sent_at_).toSec() > options_.retry_s) {
     if (options_.max_attempts > 0 && attempts_ >= options_.max_attempts) {
       state_ = State::kGaveUp;
       problem("no match accepted after " + std::to_string(attempts_) +
