@@ -10,6 +10,7 @@
 // Frames and units: map frame, metres, radians, seconds.
 
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <vector>
 
@@ -71,7 +72,9 @@ struct ErrorSummary {
   size_t count = 0;
   double rms_longitudinal_m = 0.0, rms_lateral_m = 0.0, rms_yaw_rad = 0.0;
   double mean_abs_longitudinal_m = 0.0, mean_abs_lateral_m = 0.0;
-  double p95_planar_m = 0.0, max_planar_m = 0.0;
+  /// NaN without errors (no data is reported as none, not as 0 cm).
+  double p95_planar_m = std::numeric_limits<double>::quiet_NaN();
+  double max_planar_m = std::numeric_limits<double>::quiet_NaN();
 };
 ErrorSummary summarize(const std::vector<VehicleFrameError>& errors);
 
