@@ -131,6 +131,21 @@ bool finitePose(const Pose6& p) {
 
 double wrapAngle(double a) { return std::atan2(std::sin(a), std::cos(a)); }
 
+/// The protection level of `published`, refined from grid pose `grid` whose certificate is `c`
+/// (MatchResult::protection_xy_m): the certificate's plus a cell's diagonal and the shift from
+/// the grid pose in x-y [m]; plus a heading step and the shift in heading [rad].
+struct Protection {
+  double xy_m;
+  double heading_rad;
+};
+Protection protectionOf(const MatchCertificate& c, const Pose6& grid, const Pose6& published,
+                        double resolution_m, double heading_step_rad) {
+  return {
+      c.protection_xy_m + resolution_m * std::sqrt(2.0) +
+          std::hypot(published.x - grid.x, published.y - grid.y),
+      c.protection_heading_rad + heading_step_rad + std::abs(wrapAngle(published.yaw - grid.yaw))};
+}
+
 /// Optimum's score minus the best score of the grid poses around `reference` (the two nearest
 /// translations per axis and the two nearest headings: the truth lies between them), per scan
 /// point; NaN when none of them is inside the window.
@@ -307,14 +322,11 @@ RegistrationResult<MatchResult> Registration::finishGlobal(
   // Every plausible pose of the global proof lies within its protection of the global
   // optimum, which lies a cell's diagonal and a heading step from the grid (as for the
   // confirming search), and the published pose this far from it.
-  const double res = map.geometry().resolution_m;
-  const double step = prepared.problem.window().heading_step_rad;
-  out.protection_xy_m = std::max(
-      out.protection_xy_m, global_certificate.protection_xy_m + res * std::sqrt(2.0) +
-                               std::hypot(out.pose.x - search.pose.x, out.pose.y - search.pose.y));
-  out.protection_heading_rad =
-      std::max(out.protection_heading_rad, global_certificate.protection_heading_rad + step +
-                                               std::abs(wrapAngle(out.pose.yaw - search.pose.yaw)));
+  const Protection global =
+      protectionOf(global_certificate, search.pose, out.pose, map.geometry().resolution_m,
+                   prepared.problem.window().heading_step_rad);
+  out.protection_xy_m = std::max(out.protection_xy_m, global.xy_m);
+  out.protection_heading_rad = std::max(out.protection_heading_rad, global.heading_rad);
   return r;
 }
 
@@ -361,13 +373,11 @@ RegistrationResult<MatchResult> Registration::finishLocal(
   if (timing) timing->covariance_s = t3c - t3;
   out.certificate = certifyOptimum(prepared.problem, out.search, options_.certificate, pool_.get());
   {
-    const double res = map.geometry().resolution_m;
-    const double step = prepared.problem.window().heading_step_rad;
-    out.protection_xy_m =
-        out.certificate.protection_xy_m + res * std::sqrt(2.0) +
-        std::hypot(out.pose.x - out.search.pose.x, out.pose.y - out.search.pose.y);
-    out.protection_heading_rad = out.certificate.protection_heading_rad + step +
-                                 std::abs(wrapAngle(out.pose.yaw - out.search.pose.yaw));
+    const Protection p =
+        protectionOf(out.certificate, out.search.pose, out.pose, map.geometry().resolution_m,
+                     prepared.problem.window().heading_step_rad);
+    out.protection_xy_m = p.xy_m;
+    out.protection_heading_rad = p.heading_rad;
   }
   if (request.has_reference) {
     out.reference_deficit_per_point =
