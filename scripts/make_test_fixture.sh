@@ -65,6 +65,7 @@ cat >"$OUT/fixture.launch" <<EOF
      the first ground truth offset by ($OFFSET_X m, $OFFSET_Y m, $OFFSET_YAW_DEG deg). -->
 <launch>
   <arg name="delay" default="0"/>
+  <arg name="start" default="0"/>
   <arg name="play_args" default="-q"/>
   <arg name="exit_at_end" default="false"/>
   <arg name="record" default=""/>
@@ -78,6 +79,7 @@ cat >"$OUT/fixture.launch" <<EOF
     <arg name="initial_z" value="$Z"/>
     <arg name="initial_yaw" value="$IYAW"/>
     <arg name="delay" value="\$(arg delay)"/>
+    <arg name="start" value="\$(arg start)"/>
     <arg name="play_args" value="\$(arg play_args)"/>
     <arg name="exit_at_end" value="\$(arg exit_at_end)"/>
     <arg name="record" value="\$(arg record)"/>

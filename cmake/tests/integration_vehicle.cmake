@@ -5,6 +5,8 @@
 #  - vehicle_nodelets:   localization.launch with all four nodelets in one manager, wired;
 #  - vehicle_replay:     replay.launch plays the drive; the EKF ends within 0.3 m and 1 deg of
 #                        the truth, statuses per scan, odometry at its rate;
+#  - vehicle_stale_start: the same launch with the bag played from 3 s in (the initial pose ~20 m
+#                        stale): nothing wrong accepted, relocalized by the global search;
 #  - vehicle_robustness: localization.launch under missing TF, IMU and INS dropouts, a vehicle
 #                        off the map (the test node plays the drive with those faults);
 #  - vehicle_bad_input:  localization.launch against the bad-input matrix (bad clouds, stamps,
@@ -45,7 +47,8 @@ endif()
 
 set(GMM_VEHICLE_NODELETS gmm_map_server_nodelet gmm_matcher_nodelet gmm_ekf_nodelet
   gmm_cloud_merger_nodelet gmm_gnss_initializer_nodelet gmm_ins_adapter_nodelet)
-foreach(name nodelets replay robustness bad_input gnss_start external_filter ins_adapter)
+foreach(name nodelets replay stale_start robustness bad_input gnss_start external_filter
+    ins_adapter)
   add_executable(rostest_vehicle_${name} EXCLUDE_FROM_ALL
     test/integration/vehicle_${name}_test.cpp)
   target_link_libraries(rostest_vehicle_${name} gmm_ros ${GTEST_LIBRARIES})

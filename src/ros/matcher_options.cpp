@@ -141,6 +141,8 @@ LocalizationPolicyOptions loadLocalizationPolicyOptions(const ParamSource& nh) {
   r.recall_max_gap_s = param(nh, "relocalization/recall_max_gap_s", r.recall_max_gap_s, 0.0, 10.0);
   r.lost_after_rejections =
       param(nh, "relocalization/lost_after_rejections", r.lost_after_rejections, 0, 1000000);
+  r.lost_after_wide_rejections = param(nh, "relocalization/lost_after_wide_rejections",
+                                       r.lost_after_wide_rejections, 0, 1000000);
   requireValid("localization policy options", o.validate());
   return o;
 }

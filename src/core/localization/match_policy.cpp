@@ -94,7 +94,9 @@ std::string RelocalizationPolicyOptions::validate() const {
       rangeProblem("relocalization.max_stale_prior_age_s", max_stale_prior_age_s, 0.0, 1e6),
       rangeProblem("relocalization.match_history_s", match_history_s, 0.0, 86400.0),
       rangeProblem("relocalization.recall_max_gap_s", recall_max_gap_s, 0.0, 10.0),
-      rangeProblem("relocalization.lost_after_rejections", lost_after_rejections, 0, 1000000));
+      rangeProblem("relocalization.lost_after_rejections", lost_after_rejections, 0, 1000000),
+      rangeProblem("relocalization.lost_after_wide_rejections", lost_after_wide_rejections, 0,
+                   1000000));
 }
 
 std::string LocalizationPolicyOptions::validate() const {

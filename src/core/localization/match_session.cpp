@@ -115,7 +115,7 @@ bool MatchSessionState::finishMatch(uint64_t epoch, MatchReport* report) {
     tracker_.onAccepted(report->stamp_s, report->pose, planarCovariance(report->covariance),
                         report->prior);
   } else if (report->outcome == MatchOutcome::kRejected) {
-    tracker_.onRejected();
+    tracker_.onRejected(report->stamp_s, report->prior);
   }
   return true;
 }

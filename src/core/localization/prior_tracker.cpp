@@ -137,6 +137,7 @@ void PriorTracker::setExplicitPose(const Pose6& pose, double stamp_s, PriorSourc
   relocalizing_ = true;
   global_requested_ = false;  // a new pose to search around replaces a global request
   consecutive_rejections_ = 0;
+  wide_rejections_ = 0;
 }
 
 Pose6 PriorTracker::completePlanarPose(const Pose6& planar, const OdometryBuffer* odometry,
@@ -267,6 +268,7 @@ void PriorTracker::onAccepted(double stamp_s, const Pose6& pose,
     }
   }
   consecutive_rejections_ = 0;
+  wide_rejections_ = 0;
   // A match that started before the global search was asked for does not end it.
   if (used.lost) global_requested_ = false;
   if (has_explicit_ && used.explicit_generation != explicit_generation_) return;
@@ -274,10 +276,21 @@ void PriorTracker::onAccepted(double stamp_s, const Pose6& pose,
   relocalizing_ = false;
 }
 
-void PriorTracker::onRejected() {
+void PriorTracker::onRejected(double stamp_s, const Prior& used) {
   ++consecutive_rejections_;
   if (consecutive_rejections_ >= options_.relocalization.max_consecutive_rejections) {
     relocalizing_ = true;
+  }
+  if (used.wide && !used.lost) ++wide_rejections_;
+  // The pending explicit pose moves with the vehicle: from now on it is the pose this search
+  // was centred on, at this scan's stamp (a configured pose, valid at any time until now, is
+  // thereby taken as the pose of the first scan searched around it). Carried from there by
+  // odometry, its offset from the truth stays what it was when it was given, however long
+  // the searches around it take and however short the odometry buffer is.
+  if (has_explicit_ && used.explicit_generation == explicit_generation_ && std::isfinite(stamp_s) &&
+      (used.carried_by_odometry || !std::isfinite(explicit_stamp_s_))) {
+    explicit_pose_ = used.pose;
+    explicit_stamp_s_ = stamp_s;
   }
 }
 
@@ -302,11 +315,14 @@ void PriorTracker::reset() {
   relocalizing_ = false;
   global_requested_ = false;
   consecutive_rejections_ = 0;
+  wide_rejections_ = 0;
 }
 
 bool PriorTracker::lost() const {
   const int n = options_.relocalization.lost_after_rejections;
-  return global_requested_ || (n > 0 && consecutive_rejections_ >= n);
+  const int n_wide = options_.relocalization.lost_after_wide_rejections;
+  return global_requested_ || (n > 0 && consecutive_rejections_ >= n) ||
+         (n_wide > 0 && wide_rejections_ >= n_wide);
 }
 
 PriorMode PriorTracker::mode() const {

@@ -280,10 +280,10 @@ TEST(PriorTracker, SelectsPriorsAndWidensAfterRejections) {
   EXPECT_NEAR(p.pose.x, 10.0, 1e-9);
 
   // Consecutive rejections widen the window; an accepted match restores tracking.
-  t.onRejected();
-  t.onRejected();
+  t.onRejected(1.0, t.priorAt(1.0, &odom));
+  t.onRejected(1.0, t.priorAt(1.0, &odom));
   EXPECT_FALSE(t.priorAt(1.0, &odom).wide);
-  t.onRejected();
+  t.onRejected(1.0, t.priorAt(1.0, &odom));
   EXPECT_EQ(t.mode(), PriorMode::kRelocalizing);
   p = t.priorAt(1.0, &odom);
   EXPECT_TRUE(p.wide);
@@ -323,6 +323,60 @@ TEST(PriorTracker, SelectsPriorsAndWidensAfterRejections) {
   EXPECT_TRUE(t.priorAt(1.3, &odom).wide);
   t.reset();
   EXPECT_FALSE(t.priorAt(1.3, &odom).valid());
+}
+
+// A stale initial pose (the vehicle already far from it): the searches around it follow the
+// odometry, so the offset stays what it was, and after lost_after_wide_rejections rejected wide
+// windows the global window is searched around it.
+TEST(PriorTracker, ARejectedExplicitPoseFollowsTheOdometryAndIsLostAfterWideRejections) {
+  LocalizationPolicyOptions o;
+  o.relocalization.lost_after_wide_rejections = 3;
+  o.relocalization.lost_after_rejections = 0;
+  PriorTracker t(o);
+  // 10 m/s along x over 30 s, in a buffer of 10 s (as the matcher keeps).
+  OdometryBuffer odom(10.0);
+  Pose6 given;
+  given.x = 100.0;
+  t.setExplicitPose(given, kNaN, PriorSource::kConfigured, true);
+  // Scans 4 s apart (a wide search around the wrong centre takes seconds). The configured pose is
+  // the pose of the first scan searched around it, then it moves with the vehicle.
+  const double scans[] = {5.0, 9.0, 13.0, 17.0, 21.0, 25.0};
+  int k = 0;
+  for (int i = 0; i < 4; ++i) {
+    const double ts = scans[i];
+    for (; k * 0.01 <= ts + 1e-9; ++k) odom.add(odomAt(k * 0.01, 10.0));
+    const Prior p = t.priorAt(ts, &odom);
+    ASSERT_EQ(p.source, PriorSource::kConfigured) << ts;
+    EXPECT_NEAR(p.pose.x, 100.0 + 10.0 * (ts - scans[0]), 1e-6) << ts;
+    EXPECT_EQ(p.carried_by_odometry, i > 0) << ts;
+    EXPECT_TRUE(p.wide);
+    // Wide windows rejected three times: lost, the global window around the carried pose.
+    EXPECT_EQ(p.lost, i >= 3) << ts;
+    EXPECT_EQ(t.mode(), i >= 3 ? PriorMode::kLost : PriorMode::kRelocalizing) << ts;
+    t.onRejected(ts, p);
+  }
+  // A global window rejected: still lost, still carried.
+  for (; k * 0.01 <= scans[4] + 1e-9; ++k) odom.add(odomAt(k * 0.01, 10.0));
+  Prior p = t.priorAt(scans[4], &odom);
+  EXPECT_TRUE(p.lost);
+  EXPECT_NEAR(p.pose.x, 100.0 + 10.0 * (scans[4] - scans[0]), 1e-6);
+  EXPECT_NEAR(p.wide_window.half_x_m, o.window.global_max_half_xy_m, 1e-12);
+  // A match of an older explicit pose does not re-anchor a newer one.
+  const Prior older = p;
+  Pose6 clicked;
+  clicked.x = -5.0;
+  t.setExplicitPose(clicked, scans[4], PriorSource::kInitialPose, true);
+  EXPECT_EQ(t.mode(), PriorMode::kRelocalizing);
+  t.onRejected(scans[4], older);
+  EXPECT_NEAR(t.priorAt(scans[4], &odom).pose.x, -5.0, 1e-9);
+  // Accepted: tracking; the wide count starts again.
+  Pose6 matched;
+  matched.x = -5.0;
+  t.onAccepted(scans[4], matched, Eigen::Matrix3d::Identity() * 0.01, t.priorAt(scans[4], &odom));
+  EXPECT_EQ(t.mode(), PriorMode::kTracking);
+  t.requestRelocalization();
+  t.onRejected(scans[4], t.priorAt(scans[4], &odom));
+  EXPECT_EQ(t.mode(), PriorMode::kRelocalizing);
 }
 
 TEST(PriorTracker, PreviousMatchStaleEstimatesAndTheFuture) {

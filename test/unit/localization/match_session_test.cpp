@@ -344,6 +344,7 @@ TEST(MatchSession, RejectionsInARowMakeTheLocalizationLostAndSearchTheGlobalWind
   LocalizationPolicyOptions policy;
   policy.relocalization.max_consecutive_rejections = 2;
   policy.relocalization.lost_after_rejections = 4;
+  policy.relocalization.lost_after_wide_rejections = 0;  // the count of all rejections alone
   policy.window.global_max_half_xy_m = 30.0;
   Session s(MatchSessionOptions(), policy);
   s.setConfiguredPose(poseAt(5.0, 5.0, 0.0), true);

@@ -126,10 +126,15 @@ struct RelocalizationPolicyOptions {
   double match_history_s = 600.0;
   double recall_max_gap_s = 0.5;
   /// Lost: after this many rejected matches in a row (0: never) the search covers the global
-  /// window (WindowPolicyOptions::global_max_*: by default +-12.5 m and the full turn) around
+  /// window (WindowPolicyOptions::global_max_*: by default +-50 m and the full turn) around
   /// the prior, until a match is accepted. Each such search takes seconds; scans arriving
   /// meanwhile are dropped (counted).
   int lost_after_rejections = 15;
+  /// Lost sooner: after this many rejected matches of a wide window in a row (0: never). A wide
+  /// window is searched around an explicit pose (configured, /initialpose) or after
+  /// max_consecutive_rejections; when it fails too, the truth is likely outside it (a stale
+  /// initial pose, a kidnap), and each wide search around the wrong centre takes seconds.
+  int lost_after_wide_rejections = 3;
 
   std::string validate() const;
 };

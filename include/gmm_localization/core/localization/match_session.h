@@ -94,14 +94,14 @@ class MatchSessionState {
   /// The EKF posterior (PriorTracker::setPosterior: keeps the newest, ignores non-finite).
   void setPosterior(const PosteriorEstimate& posterior);
   /// The configured initial pose: armed now (searched with `window`, null: the policy's wide
-  /// window, at the next scan, not carried by odometry) and again after each reset when
-  /// configured_pose_on_reset.
+  /// window; taken as the pose of the next scan, then carried by odometry while rejected) and
+  /// again after each reset when configured_pose_on_reset.
   void setConfiguredPose(const Pose6& pose, bool z_known, const WindowExtent* window = nullptr);
-  /// An initial pose (/initialpose) at stamp_s (NaN: valid at any time). z_known false: a planar
-  /// pose, completed with z, roll and pitch (PriorTracker::completePlanarPose). Returns the pose
-  /// searched around; *searched_z_known: whether its height is known.
-  /// covariance_xyh, when given, widens the search for a coarse pose (explicitPoseWindow);
-  /// *window_out, when given, receives the window searched.
+  /// An initial pose (/initialpose) at stamp_s (NaN: the pose at the first scan searched around
+  /// it). z_known false: a planar pose, completed with z, roll and pitch
+  /// (PriorTracker::completePlanarPose). Returns the pose searched around; *searched_z_known:
+  /// whether its height is known. covariance_xyh, when given, widens the search for a coarse pose
+  /// (explicitPoseWindow); *window_out, when given, receives the window searched.
   Pose6 setInitialPose(const Pose6& pose, double stamp_s, bool z_known,
                        bool* searched_z_known = nullptr,
                        const Eigen::Matrix3d* covariance_xyh = nullptr,

@@ -14,11 +14,15 @@
 //                  scan stamp (or, without a fresh posterior, of the last accepted match with a
 //                  sigma growing with its age).
 //   kRelocalizing  the wide window (WindowPolicyOptions::wide_*), centred on the explicit pose
-//                  while one is pending, else on the tracking centre.
+//                  while one is pending (carried by odometry from the last scan searched around
+//                  it, onRejected), else on the tracking centre.
+//   kLost          the global window (WindowPolicyOptions::global_max_*) around the same centre.
 // Transitions:
 //   setExplicitPose (/initialpose, configured pose)           -> kRelocalizing around it
 //   requestRelocalization (relocalize service)                -> kRelocalizing
 //   max_consecutive_rejections rejected matches in a row      -> kRelocalizing
+//   lost_after_rejections rejected in a row, or lost_after_wide_rejections rejected wide
+//   windows in a row, or requestRelocalization(true)          -> kLost (global window)
 //   onAccepted                                                -> kTracking (explicit pose done,
 //                                                                unless a newer one is pending)
 //   reset (time went backwards)                               -> kNoPrior
@@ -105,7 +109,8 @@ class PriorTracker {
   /// Latest EKF posterior (keeps the newest by stamp).
   void setPosterior(const PosteriorEstimate& posterior);
   /// A pose to search around with the wide window until a match is accepted. stamp_s: the
-  /// pose's time (carried by odometry to each scan); NaN: valid at any time (not carried).
+  /// pose's time (carried by odometry to each scan); NaN: the pose at the first scan searched
+  /// around it (carried from there on, onRejected).
   /// window: its own wide window (null: WindowPolicyOptions::wide_*).
   void setExplicitPose(const Pose6& pose, double stamp_s, PriorSource source, bool z_known,
                        const WindowExtent* window = nullptr);
@@ -131,8 +136,11 @@ class PriorTracker {
   /// started before /initialpose does not cancel it).
   void onAccepted(double stamp_s, const Pose6& pose, const Eigen::Matrix3d& covariance_xyh,
                   const Prior& used);
-  /// A search that ran but was not accepted (input problems and "no prior" do not count).
-  void onRejected();
+  /// A search of the scan stamped stamp_s, around `used`, that ran but was not accepted (input
+  /// problems and "no prior" do not count). A pending explicit pose that `used` came from is
+  /// re-anchored at stamp_s to the pose `used` carried it to (when carried by odometry, or when
+  /// it had no stamp): the explicit pose follows the vehicle's odometry while it is searched.
+  void onRejected(double stamp_s, const Prior& used);
   /// Forgets everything (time went backwards) except the match history.
   void reset();
   /// After a reset: when an accepted match of the history lies within
@@ -142,8 +150,9 @@ class PriorTracker {
   size_t historySize() const { return history_.size(); }
 
   PriorMode mode() const;
-  /// RelocalizationPolicyOptions::lost_after_rejections rejected matches in a row, or a global
-  /// search requested (requestRelocalization(true)) and no match accepted since.
+  /// RelocalizationPolicyOptions::lost_after_rejections rejected matches in a row, or
+  /// lost_after_wide_rejections rejected matches of a wide window in a row, or a global search
+  /// requested (requestRelocalization(true)); until a match is accepted.
   bool lost() const;
   int consecutiveRejections() const { return consecutive_rejections_; }
   bool hasPosterior() const { return has_posterior_; }
@@ -176,6 +185,7 @@ class PriorTracker {
   bool relocalizing_ = false;
   bool global_requested_ = false;
   int consecutive_rejections_ = 0;
+  int wide_rejections_ = 0;  ///< rejected in a row with a wide (not global) window
 };
 
 }  // namespace gmm_localization

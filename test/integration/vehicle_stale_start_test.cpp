@@ -1,0 +1,128 @@
+// rostest of a stale start (test/integration/vehicle_stale_start.test): the replay launch with
+// the fixture's initial pose (2.5 m, -2 m and 3 deg off the first ground truth) while the bag
+// plays from 3 s in, the vehicle by then about 20 m from that pose, outside the wide window
+// searched around it. Nothing wrong may be reported as good, and the stack must find the
+// vehicle by itself: the wide windows around the pose fail, the localization is judged lost
+// (relocalization/lost_after_wide_rejections) and the global window is searched around the
+// pose, carried by the INS odometry meanwhile. Checked at the end of the drive:
+//  - the start was stale: the truth at the first searched scan lies outside its window;
+//  - every accepted match is within 0.3 m of the truth, and the first one came from a global
+//    search;
+//  - the last accepted match is certified; the EKF ends within 0.3 m and 1 deg;
+//  - no EKF estimate is farther from the truth than max(0.3 m, 3 sigma of its covariance);
+//  - nothing non-finite was published.
+#include <gtest/gtest.h>
+#include <std_srvs/SetBool.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <memory>
+
+#include "rostest_main.h"
+#include "vehicle_test_support.h"
+
+namespace gmm_localization {
+namespace node {
+namespace {
+
+using namespace vehicle_test;  // NOLINT: test code
+
+constexpr double kTolXyM = 0.3;
+constexpr double kTolYawRad = 1.0 * M_PI / 180.0;
+
+TEST(VehicleStaleStart, FindsTheVehicleByItselfAndReportsNothingWrongAsGood) {
+  ros::NodeHandle nh;
+  Outputs outputs(nh, /*subscribe_truth=*/true);
+  double end_stamp = NAN, initial_x = NAN, initial_y = NAN;
+  ASSERT_TRUE(ros::param::get("~end_stamp", end_stamp));
+  ASSERT_TRUE(ros::param::get("~initial_pose/x", initial_x));
+  ASSERT_TRUE(ros::param::get("~initial_pose/y", initial_y));
+
+  ASSERT_TRUE(outputs.mapReadySince(0.0, 90.0))
+      << "the map server never finished rasterizing around the initial pose";
+  ASSERT_TRUE(ros::service::waitForService("/player/pause_playback", 30000));
+  std_srvs::SetBool resume;
+  resume.request.data = false;
+  ASSERT_TRUE(ros::service::call("/player/pause_playback", resume));
+  const ros::WallTime drive_start = ros::WallTime::now();
+  ASSERT_TRUE(waitFor(
+      [&] {
+        return outputs.locked(
+            [&] { return !outputs.truth_.empty() && outputs.truth_.last() >= end_stamp - 0.02; });
+      },
+      120.0))
+      << "the bag never reached its end";
+  ros::WallDuration(3.0).sleep();  // the last scans' statuses
+
+  std::vector<MatchStatus> st;
+  std::vector<nav_msgs::Odometry> od;
+  Truth truth;
+  outputs.locked([&] {
+    st = outputs.statuses_;
+    od = outputs.odometry_;
+    truth = outputs.truth_;
+    return 0;
+  });
+  ASSERT_FALSE(st.empty()) << "no scan was searched";
+
+  // The start was stale: the first scan's window did not hold the truth. The first scan of the
+  // played part may be stamped (at its revolution's start) before the first truth played.
+  ASSERT_FALSE(truth.empty()) << "no ground truth was received";
+  const auto first_truth = truth.at(std::max(st.front().header.stamp.toSec(), truth.first()));
+  ASSERT_TRUE(first_truth.has_value());
+  const double stale_m = std::hypot(first_truth->x - initial_x, first_truth->y - initial_y);
+  EXPECT_GT(stale_m, st.front().window_half_x_m)
+      << "the vehicle was inside the first window: the test does not test a stale start";
+
+  size_t accepted = 0;
+  const MatchStatus* first_accepted = nullptr;
+  const MatchStatus* last_accepted = nullptr;
+  double worst_match_m = 0.0;
+  for (const MatchStatus& s : st) {
+    if (!s.accepted) continue;
+    ++accepted;
+    if (first_accepted == nullptr) first_accepted = &s;
+    last_accepted = &s;
+    const PoseError e = poseError(truth, s.header.stamp.toSec(), toPose(s.pose.pose));
+    if (!e.valid()) continue;
+    worst_match_m = std::max(worst_match_m, e.xy_m);
+    EXPECT_LE(e.xy_m, kTolXyM) << "a match " << e.xy_m << " m off was accepted (prior "
+                               << s.prior_source << ", window " << s.window_half_x_m << " m)";
+  }
+  std::printf(
+      "[vehicle_stale_start] %.1f m stale; %zu statuses, %zu accepted, first accepted %.1f s "
+      "after the first scan played (global search %d, certified %d), worst accepted match %.3f m; "
+      "drive replayed in %.1f s wall\n",
+      stale_m, st.size(), accepted,
+      first_accepted ? first_accepted->header.stamp.toSec() - st.front().header.stamp.toSec() : NAN,
+      first_accepted ? static_cast<int>(first_accepted->global_search) : -1,
+      first_accepted ? static_cast<int>(first_accepted->certified) : -1, worst_match_m,
+      (ros::WallTime::now() - drive_start).toSec());
+  ASSERT_NE(first_accepted, nullptr) << "never relocalized";
+  EXPECT_TRUE(first_accepted->global_search) << "the first accepted match was not a global search";
+  EXPECT_TRUE(last_accepted->certified) << last_accepted->certificate_failure;
+
+  // The EKF: never far from the truth with a small covariance; ends localized.
+  double worst_ratio = 0.0;
+  for (const nav_msgs::Odometry& o : od) {
+    const PoseError e = poseError(truth, o.header.stamp.toSec(), toPose(o.pose.pose));
+    if (!e.valid()) continue;
+    const double sigma = std::sqrt(o.pose.covariance[0] + o.pose.covariance[7]);
+    const double bound = std::max(kTolXyM, 3.0 * sigma);
+    worst_ratio = std::max(worst_ratio, e.xy_m / bound);
+    EXPECT_LE(e.xy_m, bound) << "EKF estimate " << e.xy_m << " m off with sigma " << sigma
+                             << " m at " << o.header.stamp.toSec();
+  }
+  std::printf("[vehicle_stale_start] EKF: %zu estimates, worst error / max(0.3 m, 3 sigma) %.2f\n",
+              od.size(), worst_ratio);
+  expectEndsLocalized(outputs, truth, "vehicle_stale_start", kTolXyM, kTolYawRad);
+  expectNothingNonFinite(outputs);
+}
+
+}  // namespace
+}  // namespace node
+}  // namespace gmm_localization
+
+int main(int argc, char** argv) {
+  return gmm_localization::node::runRostestMain(argc, argv, "vehicle_stale_start_test");
+}
