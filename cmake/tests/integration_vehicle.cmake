@@ -9,6 +9,9 @@
 #                        stale): nothing wrong accepted, relocalized by the global search;
 #  - vehicle_robustness: localization.launch under missing TF, IMU and INS dropouts, a vehicle
 #                        off the map (the test node plays the drive with those faults);
+#  - vehicle_kidnap:     localization.launch while the test node jumps the vehicle 50 m and
+#                        90 deg: detected, relocalized by the global search, nothing wrong
+#                        reported as good;
 #  - vehicle_bad_input:  localization.launch against the bad-input matrix (bad clouds, stamps,
 #                        NaN inputs, a rogue map index, broken map directories) while it drives;
 #  - vehicle_gnss_start: localization.launch gnss_initializer:=true started from GNSS fixes;
@@ -47,8 +50,8 @@ endif()
 
 set(GMM_VEHICLE_NODELETS gmm_map_server_nodelet gmm_matcher_nodelet gmm_ekf_nodelet
   gmm_cloud_merger_nodelet gmm_gnss_initializer_nodelet gmm_ins_adapter_nodelet)
-foreach(name nodelets replay stale_start robustness bad_input gnss_start external_filter
-    ins_adapter)
+foreach(name nodelets replay stale_start robustness kidnap bad_input gnss_start
+    external_filter ins_adapter)
   add_executable(rostest_vehicle_${name} EXCLUDE_FROM_ALL
     test/integration/vehicle_${name}_test.cpp)
   target_link_libraries(rostest_vehicle_${name} gmm_ros ${GTEST_LIBRARIES})

@@ -53,6 +53,8 @@ void EkfNode::handleEvents() {
                  name_.c_str(), last_event_.c_str());
         break;
       case FilterEventKind::kGateLockout:
+      case FilterEventKind::kMatcherRelocalizing:
+      case FilterEventKind::kMatcherLost:
         ROS_WARN("%s: %s", name_.c_str(), last_event_.c_str());
         break;
     }
@@ -142,6 +144,14 @@ void EkfNode::onMatch(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& 
     ROS_WARN_THROTTLE(5.0, "%s: scan match not fused (%s): %s", name_.c_str(),
                       outcomeName(r.outcome), r.reason.c_str());
   }
+  handleEvents();
+}
+
+void EkfNode::onMatchStatus(const MatchStatus::ConstPtr& msg) {
+  const std::optional<PriorMode> mode = priorModeFromName(msg->prior_mode);
+  if (!mode) return;  // an older matcher without the field: nothing to follow
+  std::lock_guard<std::mutex> lock(mutex_);
+  filter_->onMatcherMode(msg->header.stamp.toSec(), *mode);
   handleEvents();
 }
 

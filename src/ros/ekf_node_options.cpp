@@ -85,6 +85,8 @@ FilterPolicyOptions loadFilterPolicyOptions(const ParamSource& parent) {
       param(nh, "relocalize_sigma_xy_m", o.relocalize_sigma_xy_m, 1e-3, 1000.0);
   o.relocalize_sigma_yaw_rad =
       param(nh, "relocalize_sigma_yaw_rad", o.relocalize_sigma_yaw_rad, 1e-4, 3.2);
+  o.lost_sigma_xy_m = param(nh, "lost_sigma_xy_m", o.lost_sigma_xy_m, 1e-3, 1e4);
+  o.lost_sigma_yaw_rad = param(nh, "lost_sigma_yaw_rad", o.lost_sigma_yaw_rad, 1e-4, 3.2);
   o.unknown_z_sigma_m = param(nh, "unknown_z_sigma_m", o.unknown_z_sigma_m, 1e-3, 1000.0);
   o.unknown_tilt_sigma_rad =
       param(nh, "unknown_tilt_sigma_rad", o.unknown_tilt_sigma_rad, 1e-4, 3.2);
@@ -120,6 +122,7 @@ EkfNodeOptions loadEkfNodeOptions(const ParamSource& pnh) {
   o.ekf = loadEkfOptions(pnh);
   o.filter = loadFilterPolicyOptions(pnh);
   o.use_imu = param(pnh, "use_imu", o.use_imu);
+  o.use_match_status = param(pnh, "use_match_status", o.use_match_status);
   o.use_odom_twist = param(pnh, "use_odom_twist", o.use_odom_twist);
   o.publish_rate_hz = param(pnh, "publish_rate_hz", o.publish_rate_hz, 0.1, 1000.0);
   o.publish_tf = param(pnh, "publish_tf", o.publish_tf);

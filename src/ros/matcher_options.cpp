@@ -71,6 +71,7 @@ RegistrationOptions loadRegistrationOptions(const ParamSource& parent) {
   g.max_evaluations = static_cast<int64_t>(
       param(nh, "global/max_evaluations", static_cast<int>(g.max_evaluations), 0, 1000000000));
   g.confirm_half_xy_m = param(nh, "global/confirm_half_xy_m", g.confirm_half_xy_m, 0.01, 12.5);
+  g.threads = param(nh, "global/threads", g.threads, 0, 64);
   g.confirm_half_heading_rad =
       param(nh, "global/confirm_half_heading_rad", g.confirm_half_heading_rad, 0.001, 0.5);
   o.classify_obstacles = param(nh, "classify_obstacles", o.classify_obstacles);
@@ -110,6 +111,9 @@ LocalizationPolicyOptions loadLocalizationPolicyOptions(const ParamSource& nh) {
   a.require_certificate = param(nh, "acceptance/require_certificate", a.require_certificate);
   a.require_certificate_wide =
       param(nh, "acceptance/require_certificate_wide", a.require_certificate_wide);
+  a.max_likelihood_drop =
+      param(nh, "acceptance/max_likelihood_drop", a.max_likelihood_drop, 0.0, 100.0);
+  a.likelihood_history = param(nh, "acceptance/likelihood_history", a.likelihood_history, 5, 10000);
   PoseCovariancePolicyOptions& c = o.covariance;
   c.use_search_covariance = param(nh, "covariance/use_search_covariance", c.use_search_covariance);
   c.search_covariance_scale =
@@ -141,6 +145,10 @@ LocalizationPolicyOptions loadLocalizationPolicyOptions(const ParamSource& nh) {
   r.recall_max_gap_s = param(nh, "relocalization/recall_max_gap_s", r.recall_max_gap_s, 0.0, 10.0);
   r.lost_after_rejections =
       param(nh, "relocalization/lost_after_rejections", r.lost_after_rejections, 0, 1000000);
+  r.lost_after_collapses =
+      param(nh, "relocalization/lost_after_collapses", r.lost_after_collapses, 0, 1000000);
+  r.jump_posterior_max_gap_m = param(nh, "relocalization/jump_posterior_max_gap_m",
+                                     r.jump_posterior_max_gap_m, 0.01, 1000.0);
   r.lost_after_wide_rejections = param(nh, "relocalization/lost_after_wide_rejections",
                                        r.lost_after_wide_rejections, 0, 1000000);
   requireValid("localization policy options", o.validate());

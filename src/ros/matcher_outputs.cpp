@@ -40,6 +40,7 @@ void toStatusMsg(const MatchReport& r, const std::string& map_frame, double late
   msg.accepted = r.accepted();
   msg.reason = r.reason;
   msg.prior_source = priorSourceName(r.prior.source);
+  msg.prior_mode = priorModeName(r.mode_after);
   msg.window_half_x_m = safe(r.window.half_x_m);
   msg.window_half_y_m = safe(r.window.half_y_m);
   msg.window_half_heading_rad = safe(r.window.half_heading_rad);

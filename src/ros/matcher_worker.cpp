@@ -186,6 +186,10 @@ void Matcher::publishSkipped(const ros::Time& stamp, const std::string& reason, 
   r.stamp_s = stamp.toSec();
   r.outcome = MatchOutcome::kSkipped;
   r.reason = reason;
+  {
+    std::lock_guard<std::mutex> lock(session_mutex_);
+    r.mode_after = session_.tracker().mode();
+  }
   MatchStatus status;
   toStatusMsg(r, options_.map_frame, (ros::Time::now() - stamp).toSec(), dropped, status);
   status.header.stamp = stamp;

@@ -48,6 +48,7 @@
 #include <tf2_ros/transform_broadcaster.h>
 #include <tf2_ros/transform_listener.h>
 
+#include "gmm_localization/MatchStatus.h"
 #include "gmm_localization/core/common/input_watchdog.h"
 #include "gmm_localization/core/localization/localization_filter.h"
 #include "gmm_localization/core/localization/prior_tracker.h"
@@ -71,6 +72,7 @@ class EkfNode {
   void onOdom(const nav_msgs::Odometry::ConstPtr& msg);
   void onMatch(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg);
   void onInitialPose(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg);
+  void onMatchStatus(const MatchStatus::ConstPtr& msg);
   bool onRelocalize(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
   std::optional<Eigen::Quaterniond> imuRotation(const std::string& frame);
   void handleEvents();  // needs mutex_
@@ -89,7 +91,7 @@ class EkfNode {
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
   tf2_ros::TransformBroadcaster tf_broadcaster_;
-  ros::Subscriber imu_sub_, odom_sub_, match_sub_, initialpose_sub_;
+  ros::Subscriber imu_sub_, odom_sub_, match_sub_, initialpose_sub_, status_sub_;
   ros::ServiceServer relocalize_srv_;
   ros::Publisher odometry_pub_;
   ros::Timer timer_;

@@ -22,7 +22,9 @@ struct EkfNodeOptions {
   EkfOptions ekf;
   FilterPolicyOptions filter;
 
-  bool use_imu = true;            ///< subscribe to `imu`
+  bool use_imu = true;  ///< subscribe to `imu`
+  /// subscribe to the matcher's `status` (LocalizationFilter::onMatcherMode)
+  bool use_match_status = true;
   bool use_odom_twist = true;     ///< fuse the INS twist of `odom`
   double publish_rate_hz = 50.0;  ///< odometry and map->odom TF rate (wall or sim time)
   bool publish_tf = true;

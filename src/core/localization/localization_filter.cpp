@@ -36,6 +36,8 @@ std::string FilterPolicyOptions::validate() const {
        {rangeProblem("gate_lockout_count", gate_lockout_count, 1, 1e6),
         rangeProblem("relocalize_sigma_xy_m", relocalize_sigma_xy_m, 1e-3, 1000.0),
         rangeProblem("relocalize_sigma_yaw_rad", relocalize_sigma_yaw_rad, 1e-4, 3.2),
+        rangeProblem("lost_sigma_xy_m", lost_sigma_xy_m, 1e-3, 1e4),
+        rangeProblem("lost_sigma_yaw_rad", lost_sigma_yaw_rad, 1e-4, 3.2),
         rangeProblem("unknown_z_sigma_m", unknown_z_sigma_m, 1e-3, 1000.0),
         rangeProblem("unknown_tilt_sigma_rad", unknown_tilt_sigma_rad, 1e-4, 3.2),
         rangeProblem("forward_jump_reset_count", forward_jump_reset_count, 1, 1e6),
@@ -64,6 +66,10 @@ const char* filterEventName(FilterEventKind kind) {
       return "gate_lockout";
     case FilterEventKind::kRelocalizeRequest:
       return "relocalize_request";
+    case FilterEventKind::kMatcherRelocalizing:
+      return "matcher_relocalizing";
+    case FilterEventKind::kMatcherLost:
+      return "matcher_lost";
   }
   return "?";
 }
@@ -217,6 +223,7 @@ FuseReport LocalizationFilter::addMatch(double stamp_s, const Pose6& pose,
   checkTime(r);
   if (r.outcome == FuseOutcome::kFused) {
     gate_run_ = 0;
+    last_fused_match_s_ = std::max(last_fused_match_s_, stamp_s);
   } else if (r.outcome == FuseOutcome::kRejectedGate && active_) {
     if (++gate_run_ >= options_.gate_lockout_count) {
       std::ostringstream s;
@@ -229,11 +236,19 @@ FuseReport LocalizationFilter::addMatch(double stamp_s, const Pose6& pose,
 }
 
 Status LocalizationFilter::inflate(FilterEventKind kind, double stamp_s, std::string detail) {
+  const Status st =
+      raiseCovariance(options_.relocalize_sigma_xy_m, options_.relocalize_sigma_yaw_rad);
+  if (!st) return st;
+  event(kind, stamp_s, std::move(detail));
+  return Status::success();
+}
+
+Status LocalizationFilter::raiseCovariance(double sigma_xy_m, double sigma_yaw_rad) {
   if (!active_) return Status::failure("filter not running");
   const EkfState& s = ekf_.state();
   Matrix6d c = s.poseCovariance();
-  const double vxy = options_.relocalize_sigma_xy_m * options_.relocalize_sigma_xy_m;
-  const double vh = options_.relocalize_sigma_yaw_rad * options_.relocalize_sigma_yaw_rad;
+  const double vxy = sigma_xy_m * sigma_xy_m;
+  const double vh = sigma_yaw_rad * sigma_yaw_rad;
   for (int i : {kStateX, kStateY, kStateYaw}) {
     const double v = std::max(c(i, i), i == kStateYaw ? vh : vxy);
     c.row(i).setZero();
@@ -243,13 +258,31 @@ Status LocalizationFilter::inflate(FilterEventKind kind, double stamp_s, std::st
   const Status st = ekf_.setPose(s.pose(), c, ekf_.time());
   if (!st) return st;
   gate_run_ = 0;
-  event(kind, stamp_s, std::move(detail));
   return Status::success();
 }
 
 Status LocalizationFilter::relocalize(double stamp_s) {
   return inflate(FilterEventKind::kRelocalizeRequest, stamp_s,
                  "relocalization requested: covariance inflated");
+}
+
+void LocalizationFilter::onMatcherMode(double stamp_s, PriorMode mode) {
+  // A status older than a fused match (the two topics' callbacks may interleave) is stale.
+  if (stamp_s < last_fused_match_s_) return;
+  const PriorMode before = matcher_mode_;
+  matcher_mode_ = mode;
+  if (!active_ || (mode != PriorMode::kRelocalizing && mode != PriorMode::kLost)) return;
+  const bool lost = mode == PriorMode::kLost;
+  const double sxy = lost ? options_.lost_sigma_xy_m : options_.relocalize_sigma_xy_m;
+  const double syaw = lost ? options_.lost_sigma_yaw_rad : options_.relocalize_sigma_yaw_rad;
+  // Every status in that mode keeps the floor (a fused match may have lowered it); the event
+  // is reported once per entry into the mode.
+  if (!raiseCovariance(sxy, syaw) || mode == before) return;
+  std::ostringstream d;
+  d << "the matcher is " << priorModeName(mode) << ": x, y, yaw sigmas raised to at least " << sxy
+    << " m, " << syaw << " rad";
+  event(lost ? FilterEventKind::kMatcherLost : FilterEventKind::kMatcherRelocalizing, stamp_s,
+        d.str());
 }
 
 Status LocalizationFilter::setInitialPose(const Pose6& pose_in, const Matrix6d& covariance,
@@ -301,6 +334,9 @@ void LocalizationFilter::stop() {
   if (active_) ++stops_;
   active_ = false;
   gate_run_ = forward_jumps_ = 0;
+  // A new timeline (time went backwards) or a new start: earlier stamps count again.
+  last_fused_match_s_ = -std::numeric_limits<double>::infinity();
+  matcher_mode_ = PriorMode::kNoPrior;
 }
 
 Result<EkfState> LocalizationFilter::stateAt(double time_s) const {

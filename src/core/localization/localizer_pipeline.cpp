@@ -138,6 +138,8 @@ void LocalizerPipeline::complete() {
     r.offered_to_filter = true;
     r.fuse = filter_.addMatch(m.stamp_s, m.pose, m.covariance);
   }
+  // EKF side: the status of the scan (the matcher's mode after it).
+  filter_.onMatcherMode(r.match.stamp_s, r.match.mode_after);
   const double finish = r.finish_s;
   reports_.push_back(std::move(r));
   if (session_.hasWaiting()) startNext(finish);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <limits>
 #include <sstream>
 
@@ -66,7 +67,9 @@ std::string AcceptancePolicyOptions::validate() const {
                                  min_log_likelihood_per_point, -100.0, 10.0),
                     rangeProblem("acceptance.min_map_coverage", min_map_coverage, 0.0, 1.0),
                     rangeProblem("acceptance.max_sigma_xy_m", max_sigma_xy_m, 0.0, 1000.0),
-                    rangeProblem("acceptance.max_sigma_yaw_rad", max_sigma_yaw_rad, 0.0, 10.0));
+                    rangeProblem("acceptance.max_sigma_yaw_rad", max_sigma_yaw_rad, 0.0, 10.0),
+                    rangeProblem("acceptance.max_likelihood_drop", max_likelihood_drop, 0.0, 100.0),
+                    rangeProblem("acceptance.likelihood_history", likelihood_history, 5, 10000));
 }
 
 std::string PoseCovariancePolicyOptions::validate() const {
@@ -96,7 +99,10 @@ std::string RelocalizationPolicyOptions::validate() const {
       rangeProblem("relocalization.recall_max_gap_s", recall_max_gap_s, 0.0, 10.0),
       rangeProblem("relocalization.lost_after_rejections", lost_after_rejections, 0, 1000000),
       rangeProblem("relocalization.lost_after_wide_rejections", lost_after_wide_rejections, 0,
-                   1000000));
+                   1000000),
+      rangeProblem("relocalization.lost_after_collapses", lost_after_collapses, 0, 1000000),
+      rangeProblem("relocalization.jump_posterior_max_gap_m", jump_posterior_max_gap_m, 0.01,
+                   1000.0));
 }
 
 std::string LocalizationPolicyOptions::validate() const {
@@ -162,8 +168,10 @@ SearchWindow discreteWindow(const MatchRequest& request, double heading_step_rad
                                   request.half_heading_rad, heading_step_rad, resolution_m);
 }
 
-AcceptanceDecision acceptMatch(const MatchResult& r, const SearchWindow& window,
-                               const AcceptancePolicyOptions& o, bool wide) {
+namespace {
+/// The rules before the likelihood collapse, in acceptMatch's order.
+AcceptanceDecision acceptanceRules(const MatchResult& r, const SearchWindow& window,
+                                   const AcceptancePolicyOptions& o, bool wide) {
   AcceptanceDecision d;
   const Pose6& p = r.pose;
   if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) && std::isfinite(p.roll) &&
@@ -216,6 +224,28 @@ AcceptanceDecision acceptMatch(const MatchResult& r, const SearchWindow& window,
     return d;
   }
   d.accepted = true;
+  return d;
+}
+}  // namespace
+
+AcceptanceDecision acceptMatch(const MatchResult& r, const SearchWindow& window,
+                               const AcceptancePolicyOptions& o, bool wide, double recent_ll) {
+  AcceptanceDecision d = acceptanceRules(r, window, o, wide);
+  // The collapse is noted whatever rule rejects the match (a kidnapped scan often ends on the
+  // window's edge too), and rejects an otherwise acceptable one.
+  d.likelihood_collapsed = !wide && o.max_likelihood_drop > 0.0 && std::isfinite(recent_ll) &&
+                           !r.certificate.certified &&
+                           r.certificate.failure != CertificateFailure::kDisabled &&
+                           r.log_likelihood_per_point < recent_ll - o.max_likelihood_drop;
+  if (d.accepted && d.likelihood_collapsed) {
+    std::ostringstream s;
+    s << std::fixed << std::setprecision(2) << "likelihood collapsed: log-likelihood per point "
+      << r.log_likelihood_per_point << ", " << recent_ll - r.log_likelihood_per_point
+      << " below the recent median " << recent_ll << ", uncertified ("
+      << certificateFailureName(r.certificate.failure) << ")";
+    d.accepted = false;
+    d.reason = s.str();
+  }
   return d;
 }
 

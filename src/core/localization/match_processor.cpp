@@ -115,8 +115,12 @@ MatchReport MatchProcessor::process(const ChunkMap& map, ScanInput scan, const P
   r.correction_yaw_rad = wrap(m.pose.yaw - prior.pose.yaw);
 
   const AcceptanceDecision d =
-      acceptMatch(m, r.search_window, policy_.acceptance, prior.wide || prior.lost);
-  if (!d.accepted) return finish(MatchOutcome::kRejected, d.reason);
+      acceptMatch(m, r.search_window, policy_.acceptance, prior.wide || prior.lost,
+                  prior.recent_log_likelihood_per_point);
+  if (!d.accepted) {
+    r.likelihood_collapsed = d.likelihood_collapsed;
+    return finish(MatchOutcome::kRejected, d.reason);
+  }
   r.pose = m.pose;
   // A certificate switched off proves nothing either way: the covariance stays as it was.
   const bool certified =

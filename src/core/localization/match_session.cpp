@@ -109,14 +109,17 @@ bool MatchSessionState::finishMatch(uint64_t epoch, MatchReport* report) {
   if (epoch != epoch_) {
     report->outcome = MatchOutcome::kSkipped;
     report->reason = "discarded: time went backwards during the match";
+    report->mode_after = tracker_.mode();
     return false;
   }
   if (report->outcome == MatchOutcome::kAccepted) {
     tracker_.onAccepted(report->stamp_s, report->pose, planarCovariance(report->covariance),
-                        report->prior);
+                        report->prior,
+                        report->has_result ? report->result.log_likelihood_per_point : NAN);
   } else if (report->outcome == MatchOutcome::kRejected) {
-    tracker_.onRejected(report->stamp_s, report->prior);
+    tracker_.onRejected(report->stamp_s, report->prior, report->likelihood_collapsed);
   }
+  report->mode_after = tracker_.mode();
   return true;
 }
 

@@ -110,6 +110,14 @@ const char* priorModeName(PriorMode mode) {
   }
 }
 
+std::optional<PriorMode> priorModeFromName(const std::string& name) {
+  for (PriorMode m :
+       {PriorMode::kNoPrior, PriorMode::kTracking, PriorMode::kRelocalizing, PriorMode::kLost}) {
+    if (name == priorModeName(m)) return m;
+  }
+  return std::nullopt;
+}
+
 void PriorTracker::setPosterior(const PosteriorEstimate& p) {
   if (!std::isfinite(p.stamp_s) || !p.map_T_base.matrix().allFinite() ||
       !p.covariance.allFinite()) {
@@ -138,6 +146,7 @@ void PriorTracker::setExplicitPose(const Pose6& pose, double stamp_s, PriorSourc
   global_requested_ = false;  // a new pose to search around replaces a global request
   consecutive_rejections_ = 0;
   wide_rejections_ = 0;
+  collapses_ = 0;
 }
 
 Pose6 PriorTracker::completePlanarPose(const Pose6& planar, const OdometryBuffer* odometry,
@@ -200,12 +209,14 @@ Prior PriorTracker::priorAt(double ts, const OdometryBuffer* odometry) const {
     return widenIfLost(p);
   }
   // Ages are |scan - estimate|; an estimate from the future beyond the fresh limit (the other
-  // timeline of a looping bag) is never used.
+  // timeline of a looping bag) is never used. After a jump, a posterior that disagrees with
+  // the accepted matches has not fused them yet (or refused them): it is not used.
   const double inf = std::numeric_limits<double>::infinity();
-  const double posterior_age = has_posterior_ ? std::abs(ts - posterior_.stamp_s) : inf;
+  const bool posterior_trusted = has_posterior_ && !posteriorDisagrees(ts, odometry);
+  const double posterior_age = posterior_trusted ? std::abs(ts - posterior_.stamp_s) : inf;
   const double match_age = has_match_ ? std::abs(ts - match_.stamp_s) : inf;
   const double stale_posterior_age =
-      has_posterior_ && posterior_.stamp_s <= ts ? ts - posterior_.stamp_s : inf;
+      posterior_trusted && posterior_.stamp_s <= ts ? ts - posterior_.stamp_s : inf;
   const double stale_match_age = has_match_ && match_.stamp_s <= ts ? ts - match_.stamp_s : inf;
   Prior p;
   if (posterior_age <= o.max_posterior_age_s) {
@@ -241,7 +252,25 @@ Prior PriorTracker::priorAt(double ts, const OdometryBuffer* odometry) const {
   return widenIfLost(p);
 }
 
+bool PriorTracker::posteriorDisagrees(double ts, const OdometryBuffer* odometry) const {
+  if (!distrust_posterior_ || !has_match_ || !has_posterior_) return false;
+  const Prior a = carried(Estimate{posterior_.stamp_s, posterior_.map_T_base,
+                                   planarCovariance(posterior_.covariance), posterior_.twist},
+                          ts, odometry);
+  const Prior b = carried(match_, ts, odometry);
+  return std::hypot(a.pose.x - b.pose.x, a.pose.y - b.pose.y) >
+         options_.relocalization.jump_posterior_max_gap_m;
+}
+
+double PriorTracker::recentLogLikelihood() const {
+  if (recent_ll_.empty()) return NAN;
+  std::vector<double> v(recent_ll_.begin(), recent_ll_.end());
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
 Prior PriorTracker::widenIfLost(Prior p) const {
+  p.recent_log_likelihood_per_point = recentLogLikelihood();
   if (!lost()) return p;
   const WindowPolicyOptions& w = options_.window;
   p.lost = true;
@@ -252,8 +281,23 @@ Prior PriorTracker::widenIfLost(Prior p) const {
 }
 
 void PriorTracker::onAccepted(double stamp_s, const Pose6& pose,
-                              const Eigen::Matrix3d& covariance_xyh, const Prior& used) {
+                              const Eigen::Matrix3d& covariance_xyh, const Prior& used,
+                              double log_likelihood_per_point) {
   has_match_ = true;
+  // The reference of the likelihood-collapse rule: a jump (wide or global window) starts it
+  // again, from the place the vehicle was found. Until a posterior agrees with the matches
+  // again (a tracking match searched around it is accepted), the posterior is checked.
+  if (used.wide || used.lost) {
+    recent_ll_.clear();
+    distrust_posterior_ = true;
+  } else if (used.source == PriorSource::kEkf) {
+    distrust_posterior_ = false;
+  }
+  if (std::isfinite(log_likelihood_per_point)) {
+    recent_ll_.push_back(log_likelihood_per_point);
+    const size_t keep = static_cast<size_t>(std::max(5, options_.acceptance.likelihood_history));
+    while (recent_ll_.size() > keep) recent_ll_.pop_front();
+  }
   match_ = Estimate{stamp_s, toIsometry(pose), covariance_xyh, BodyTwist()};
   if (has_posterior_) match_.twist = posterior_.twist;
   const double keep_s = options_.relocalization.match_history_s;
@@ -269,6 +313,7 @@ void PriorTracker::onAccepted(double stamp_s, const Pose6& pose,
   }
   consecutive_rejections_ = 0;
   wide_rejections_ = 0;
+  collapses_ = 0;
   // A match that started before the global search was asked for does not end it.
   if (used.lost) global_requested_ = false;
   if (has_explicit_ && used.explicit_generation != explicit_generation_) return;
@@ -276,8 +321,9 @@ void PriorTracker::onAccepted(double stamp_s, const Pose6& pose,
   relocalizing_ = false;
 }
 
-void PriorTracker::onRejected(double stamp_s, const Prior& used) {
+void PriorTracker::onRejected(double stamp_s, const Prior& used, bool collapsed) {
   ++consecutive_rejections_;
+  collapses_ = collapsed ? collapses_ + 1 : 0;
   if (consecutive_rejections_ >= options_.relocalization.max_consecutive_rejections) {
     relocalizing_ = true;
   }
@@ -316,13 +362,17 @@ void PriorTracker::reset() {
   global_requested_ = false;
   consecutive_rejections_ = 0;
   wide_rejections_ = 0;
+  collapses_ = 0;
+  recent_ll_.clear();
+  distrust_posterior_ = false;
 }
 
 bool PriorTracker::lost() const {
   const int n = options_.relocalization.lost_after_rejections;
   const int n_wide = options_.relocalization.lost_after_wide_rejections;
+  const int n_collapse = options_.relocalization.lost_after_collapses;
   return global_requested_ || (n > 0 && consecutive_rejections_ >= n) ||
-         (n_wide > 0 && wide_rejections_ >= n_wide);
+         (n_wide > 0 && wide_rejections_ >= n_wide) || (n_collapse > 0 && collapses_ >= n_collapse);
 }
 
 PriorMode PriorTracker::mode() const {

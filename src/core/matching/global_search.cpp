@@ -101,6 +101,9 @@ std::string GlobalSearchOptions::validate() const {
   }
   if (max_evaluations < 0) return "max_evaluations must be >= 0";
   if (queues < 0 || queues > 64) return "queues=" + std::to_string(queues) + " must be in [0, 64]";
+  if (threads < 0 || threads > 64) {
+    return "threads=" + std::to_string(threads) + " must be in [0, 64]";
+  }
   if (!(confirm_half_xy_m > 0.0 && confirm_half_xy_m <= 12.5)) {
     return "confirm_half_xy_m must be in (0, 12.5]";
   }

@@ -8,10 +8,19 @@
 
 namespace gmm_localization {
 
-Registration::Registration(const RegistrationOptions& options, std::shared_ptr<TaskPool> pool)
-    : options_(options), pool_(std::move(pool)) {
+Registration::Registration(const RegistrationOptions& options, std::shared_ptr<TaskPool> pool,
+                           std::shared_ptr<TaskPool> global_pool)
+    : options_(options), pool_(std::move(pool)), global_pool_(std::move(global_pool)) {
   if (pool_ == nullptr && TaskPool::resolve(options_.threads) > 1) {
     pool_ = std::make_shared<TaskPool>(options_.threads);
+  }
+  if (global_pool_ == nullptr) {
+    const int n = TaskPool::resolve(options_.global.threads);
+    if (n == TaskPool::resolve(options_.threads)) {
+      global_pool_ = pool_;
+    } else if (n > 1) {
+      global_pool_ = std::make_shared<TaskPool>(options_.global.threads);
+    }
   }
 }
 
@@ -259,7 +268,7 @@ SearchOutcome Registration::search(const SearchProblem& problem,
   // Algorithm 2 (reference) or 3 over x, y, heading; wide heading ranges over intervals.
   if (options_.exhaustive) return exhaustiveSearch(problem);
   if (problem.window().sizeH() >= options_.interval_search_min_headings) {
-    GlobalSearchOutcome g = globalBranchAndBound(problem, options_.global, pool_.get());
+    GlobalSearchOutcome g = globalBranchAndBound(problem, options_.global, global_pool_.get());
     if (complete != nullptr) *complete = g.complete;
     return std::move(g.best);
   }
@@ -286,7 +295,7 @@ RegistrationResult<MatchResult> Registration::finishGlobal(
   MatchCertificate global_certificate;
   if (options_.certificate.enabled) {
     global_certificate = certifyGlobalOptimum(prepared.problem, search, options_.certificate,
-                                              options_.global, pool_.get());
+                                              options_.global, global_pool_.get());
   }
   const double t1 = tick();
   // The confirming search: the tracking search around the global optimum, on all points.

@@ -316,7 +316,11 @@ TEST(PriorTracker, SelectsPriorsAndWidensAfterRejections) {
   p = t.priorAt(1.3, &odom);
   EXPECT_EQ(p.source, PriorSource::kInitialPose);
   EXPECT_EQ(p.explicit_generation, older.explicit_generation + 1);
-  t.onAccepted(1.3, matched, Eigen::Matrix3d::Identity() * 0.01, p);
+  // Its own match accepted: tracking on the EKF again (whose posterior, carried to 1.3 s at
+  // x = 13, agrees with the match: after a jump a disagreeing one is not used).
+  Pose6 found;
+  found.x = 13.0;
+  t.onAccepted(1.3, found, Eigen::Matrix3d::Identity() * 0.01, p);
   EXPECT_EQ(t.priorAt(1.3, &odom).source, PriorSource::kEkf);
 
   t.requestRelocalization();

@@ -132,6 +132,46 @@ TEST_F(RegistrationTest, OnAnyThreadCountTheSameResultBitForBit) {
   }
 }
 
+TEST_F(RegistrationTest, TheGlobalSearchRunsOnItsOwnPoolWithTheSameResult) {
+  // global.threads differs from threads: the global search and its certificate get a pool of
+  // their own; the same count shares the match's pool; the optimum is the same either way.
+  RegistrationOptions options;
+  const Registration one(options);
+  EXPECT_EQ(one.globalPool(), nullptr);
+  options.global.threads = 2;
+  const Registration global_two(options);
+  EXPECT_EQ(global_two.pool(), nullptr);
+  ASSERT_NE(global_two.globalPool(), nullptr);
+  EXPECT_EQ(global_two.globalPool()->threads(), 2);
+  options.threads = 2;
+  const Registration both_two(options);
+  EXPECT_EQ(both_two.globalPool(), both_two.pool());
+  std::mt19937 rng(78);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int c = 0; c < 2; ++c) {
+    const Pose6 truth = world_->streetPose(rng);
+    const PointList scan = world_->scan(truth, 35.0, 0.2, 0.0, 400 + c);
+    MatchRequest req;
+    req.prior = truth;
+    req.prior.x += 3.0 * u(rng);
+    req.prior.y += 3.0 * u(rng);
+    req.prior.yaw += 2.0 * u(rng);
+    req.half_x_m = req.half_y_m = 6.0;
+    req.half_heading_rad = M_PI;
+    const auto a = one.match(*chunks_, scan, req);
+    const auto b = global_two.match(*chunks_, scan, req);
+    ASSERT_TRUE(a.ok()) << a.error();
+    ASSERT_TRUE(b.ok()) << b.error();
+    EXPECT_TRUE(a->global) << "case " << c;
+    EXPECT_EQ(a->search.score, b->search.score) << "case " << c;
+    EXPECT_EQ(a->pose.x, b->pose.x) << "case " << c;
+    EXPECT_EQ(a->pose.y, b->pose.y) << "case " << c;
+    EXPECT_EQ(a->pose.yaw, b->pose.yaw) << "case " << c;
+    EXPECT_EQ(a->global_certificate.certified, b->global_certificate.certified) << "case " << c;
+    EXPECT_LE(std::hypot(a->pose.x - truth.x, a->pose.y - truth.y), 0.1) << "case " << c;
+  }
+}
+
 TEST(RegistrationOptionsThreads, OutOfRangeIsRejectedWithTheRange) {
   RegistrationOptions o;
   o.threads = -1;

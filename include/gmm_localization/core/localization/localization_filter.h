@@ -13,6 +13,11 @@
 //   relocalization sigmas. The matcher then sees a 3-sigma beyond its maximum window in the
 //   posterior and searches the maximum window; the next match passes the gate and collapses
 //   the covariance again (paper V-B: matches "initialized around our 3-sigma posterior").
+// - the matcher's mode (onMatcherMode, from each MatchStatus): when it no longer confirms the
+//   estimate (relocalizing: rejected matches in a row; lost: the global window next) the x, y,
+//   yaw covariance is raised to at least the relocalization or the lost sigmas, so that the
+//   published covariance covers a vehicle that is not where the filter thinks (a kidnap, a
+//   stale start) and the match that relocalizes it passes the Mahalanobis gate.
 // - time going backwards (a looping bag: Ekf reports kTimeWentBackwards) or
 //   forward_jump_reset_count consecutive forward jumps: the filter stops (inactive) and waits
 //   for a new initial pose or match. Counters survive (they live in the Ekf).
@@ -20,11 +25,13 @@
 
 #include <array>
 #include <deque>
+#include <limits>
 #include <string>
 #include <vector>
 
 #include "gmm_localization/core/common/types.h"
 #include "gmm_localization/core/filter/ekf.h"
+#include "gmm_localization/core/localization/prior_tracker.h"
 
 namespace gmm_localization {
 
@@ -52,6 +59,11 @@ struct FilterPolicyOptions {
   /// 12.5 m / 15 deg, anything above 4.2 m / 0.087 rad searches the maximum window.
   double relocalize_sigma_xy_m = 6.0;
   double relocalize_sigma_yaw_rad = 0.13;
+  /// x, y and yaw standard deviations while the matcher is lost [m], [rad]: at least the global
+  /// window (the matcher's window/global_max_half_xy_m, 50 m, as 3 sigma); yaw: a full turn is
+  /// beyond a Gaussian, 1.05 rad puts a 90 deg error at 1.5 sigma.
+  double lost_sigma_xy_m = 17.0;
+  double lost_sigma_yaw_rad = 1.05;
   /// Standard deviations of a planar initial pose's unknown z and roll/pitch [m], [rad].
   double unknown_z_sigma_m = 3.0;
   double unknown_tilt_sigma_rad = 0.05;
@@ -75,8 +87,10 @@ enum class FilterEventKind {
   kInitializedFromMatch,  ///< first match started the filter
   kStoppedTimeBackwards,  ///< waiting for a new initial pose or match
   kStoppedTimeJump,
-  kGateLockout,        ///< covariance inflated after consecutive gate rejections
-  kRelocalizeRequest,  ///< covariance inflated on request
+  kGateLockout,          ///< covariance inflated after consecutive gate rejections
+  kRelocalizeRequest,    ///< covariance inflated on request
+  kMatcherRelocalizing,  ///< covariance inflated: the matcher no longer confirms the estimate
+  kMatcherLost,          ///< covariance inflated to the lost sigmas: the matcher is lost
 };
 const char* filterEventName(FilterEventKind kind);
 
@@ -110,6 +124,12 @@ class LocalizationFilter {
                         bool z_and_tilt_known);
   /// Inflates x, y, yaw to the relocalization sigmas; fails when the filter is not running.
   Status relocalize(double stamp_s);
+  /// The matcher's prior mode after a scan stamped stamp_s (MatchReport::mode_after, the
+  /// status's prior_mode): kRelocalizing raises x, y, yaw to at least the relocalization sigmas,
+  /// kLost to at least the lost sigmas (an event on each entry into either mode); other modes
+  /// change nothing. Nothing happens while the filter is inactive, nor for a stamp older than
+  /// the newest fused match.
+  void onMatcherMode(double stamp_s, PriorMode mode);
   /// Stops the filter (waits for an initial pose or a match).
   void stop();
 
@@ -129,7 +149,11 @@ class LocalizationFilter {
   LocalizationFilter(Ekf ekf, const FilterPolicyOptions& options)
       : ekf_(std::move(ekf)), options_(options) {}
   void checkTime(const FuseReport& report);
+  /// raiseCovariance to the relocalization sigmas, and the event.
   Status inflate(FilterEventKind kind, double stamp_s, std::string detail);
+  /// Raises the x, y, yaw variances to at least sigma_xy_m^2 and sigma_yaw_rad^2 (their
+  /// correlations dropped); fails when the filter is not running.
+  Status raiseCovariance(double sigma_xy_m, double sigma_yaw_rad);
   void event(FilterEventKind kind, double stamp_s, std::string detail);
   /// Feeds the kept IMU and twist samples stamped after stamp_s, in time order, then drops all.
   void replayPending(double stamp_s);
@@ -140,6 +164,8 @@ class LocalizationFilter {
   FilterPolicyOptions options_;
   bool active_ = false;
   int gate_run_ = 0;
+  PriorMode matcher_mode_ = PriorMode::kNoPrior;  ///< the last reported (onMatcherMode)
+  double last_fused_match_s_ = -std::numeric_limits<double>::infinity();
   int forward_jumps_ = 0;
   uint64_t lockouts_ = 0;
   uint64_t stops_ = 0;

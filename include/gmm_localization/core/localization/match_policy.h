@@ -76,6 +76,17 @@ struct AcceptancePolicyOptions {
   /// pose is taken only on a proof that nothing else in the window explains the scan as well
   /// (certificates switched off: not applied). Tracking matches follow require_certificate.
   bool require_certificate_wide = true;
+  /// Likelihood collapse [nats per point]: an uncertified match of a tracking window whose
+  /// log-likelihood per point lies more than this below the median of the recent accepted
+  /// matches (Prior::recent_log_likelihood_per_point) is rejected. A kidnapped vehicle, or a
+  /// track that slid onto a wrong pose, fits the map far worse than a moment before, and its
+  /// window then holds no clear optimum; a certified match is kept (its window holds one
+  /// unique explanation: a bus beside the car lowers the likelihood of a right match too).
+  /// 0: off.
+  double max_likelihood_drop = 1.0;
+  /// Accepted matches whose median is that reference; an accepted wide or global match starts
+  /// it again (from that match alone).
+  int likelihood_history = 20;
 
   std::string validate() const;
 };
@@ -134,7 +145,17 @@ struct RelocalizationPolicyOptions {
   /// window is searched around an explicit pose (configured, /initialpose) or after
   /// max_consecutive_rejections; when it fails too, the truth is likely outside it (a stale
   /// initial pose, a kidnap), and each wide search around the wrong centre takes seconds.
-  int lost_after_wide_rejections = 3;
+  int lost_after_wide_rejections = 1;
+  /// Lost at once: after this many rejections in a row by the likelihood-collapse rule
+  /// (AcceptancePolicyOptions::max_likelihood_drop; 0: never), the wide window is skipped: the
+  /// scan fits nowhere near the estimate (a kidnap), and around a wrong centre a wide search
+  /// takes seconds while the vehicle drives away from it.
+  int lost_after_collapses = 5;
+  /// After a jump (a match of a wide or global window accepted), an EKF posterior farther than
+  /// this from the last accepted match (both carried to the scan stamp) has not fused it yet
+  /// (a global match arrives seconds late) or refused it: the matches are followed instead,
+  /// until a tracking match searched around the posterior is accepted [m].
+  double jump_posterior_max_gap_m = 2.0;
 
   std::string validate() const;
 };
@@ -179,6 +200,9 @@ struct Prior {
   double age_s = 0.0;
   /// True when odometry carried the estimate to the scan stamp (else constant velocity).
   bool carried_by_odometry = false;
+  /// Median log-likelihood per point of the recent accepted matches [nats] (NaN: none since
+  /// the last reset), for AcceptancePolicyOptions::max_likelihood_drop.
+  double recent_log_likelihood_per_point = NAN;
   /// The localization is judged lost (RelocalizationPolicyOptions::lost_after_rejections): the
   /// window is the global one.
   bool lost = false;
@@ -210,13 +234,17 @@ SearchWindow discreteWindow(const MatchRequest& request, double heading_step_rad
 struct AcceptanceDecision {
   bool accepted = false;
   std::string reason;  ///< why not, naming the value and the limit; empty when accepted
+  bool likelihood_collapsed = false;  ///< rejected by AcceptancePolicyOptions::max_likelihood_drop
 };
 
 /// Applies the acceptance rules in the order: finite result, map coverage, log-likelihood per
 /// point, search covariance, window edge, certificate (when required; `wide`: the prior was
-/// wide or lost, see require_certificate_wide). `window` is discreteWindow() of the request.
+/// wide or lost, see require_certificate_wide), likelihood collapse (tracking windows only;
+/// recent_log_likelihood_per_point: the reference, NaN: none yet). `window` is discreteWindow()
+/// of the request.
 AcceptanceDecision acceptMatch(const MatchResult& result, const SearchWindow& window,
-                               const AcceptancePolicyOptions& options, bool wide = false);
+                               const AcceptancePolicyOptions& options, bool wide = false,
+                               double recent_log_likelihood_per_point = NAN);
 
 /// The 6x6 covariance published with a match: the (x, y, yaw) block from the search
 /// covariance (scaled) or the fixed sigmas, floored; z, roll, pitch from the fixed sigmas; no

@@ -46,9 +46,13 @@ struct MatchReport {
   double stamp_s = 0.0;
   MatchOutcome outcome = MatchOutcome::kSkipped;
   bool accepted() const { return outcome == MatchOutcome::kAccepted; }
-  std::string reason;  ///< why not accepted; empty when accepted
+  std::string reason;                 ///< why not accepted; empty when accepted
+  bool likelihood_collapsed = false;  ///< rejected by the likelihood-collapse rule
 
   Prior prior;
+  /// The matcher's prior mode once this scan's outcome was learnt (MatchSessionState::
+  /// finishMatch): relocalizing or lost tell the filter its estimate is not confirmed.
+  PriorMode mode_after = PriorMode::kNoPrior;
   WindowExtent window;         ///< requested half extents
   SearchWindow search_window;  ///< discretised (cells, heading steps), valid when searched
   bool deskewed = false;
@@ -98,7 +102,9 @@ class MatchProcessor {
  private:
   MatchProcessor(const RegistrationOptions& tracking, const RegistrationOptions& unknown_z,
                  const LocalizationPolicyOptions& policy)
-      : tracking_(tracking), unknown_z_(unknown_z, tracking_.pool()), policy_(policy) {}
+      : tracking_(tracking),
+        unknown_z_(unknown_z, tracking_.pool(), tracking_.globalPool()),
+        policy_(policy) {}
 
   Registration tracking_;   ///< prior height known
   Registration unknown_z_;  ///< wider height pre-alignment (planar initial pose)

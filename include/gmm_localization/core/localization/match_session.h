@@ -21,7 +21,8 @@
 // - Outcome: finishMatch() applies the result of a match begun with that epoch: begun in an
 //   older epoch -> discarded (outcome skipped, reason "discarded: time went backwards during the
 //   match"); accepted -> PriorTracker::onAccepted with the (x, y, yaw) block of the published
-//   covariance; rejected -> PriorTracker::onRejected; skipped -> nothing.
+//   covariance; rejected -> PriorTracker::onRejected; skipped -> nothing. The report's
+//   mode_after is then the tracker's mode.
 //
 // MatchSession<Item> queues Items (the nodelet: the received clouds, converted in its worker;
 // LocalizerPipeline: the scan with its arrival time and latency). The rules that do not depend

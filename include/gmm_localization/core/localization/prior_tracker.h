@@ -22,7 +22,8 @@
 //   requestRelocalization (relocalize service)                -> kRelocalizing
 //   max_consecutive_rejections rejected matches in a row      -> kRelocalizing
 //   lost_after_rejections rejected in a row, or lost_after_wide_rejections rejected wide
-//   windows in a row, or requestRelocalization(true)          -> kLost (global window)
+//   windows in a row, or lost_after_collapses likelihood collapses in a row, or
+//   requestRelocalization(true)                               -> kLost (global window)
 //   onAccepted                                                -> kTracking (explicit pose done,
 //                                                                unless a newer one is pending)
 //   reset (time went backwards)                               -> kNoPrior
@@ -32,6 +33,8 @@
 // window (e.g. after the EKF reset on a time jump); beyond that there is no prior.
 
 #include <deque>
+#include <optional>
+#include <string>
 
 #include <Eigen/Geometry>
 
@@ -100,6 +103,8 @@ struct PosteriorEstimate {
 enum class PriorMode { kNoPrior, kTracking, kRelocalizing, kLost };
 /// "no_prior", "tracking", "relocalizing", "lost"
 const char* priorModeName(PriorMode mode);
+/// The mode of a priorModeName() text; none for any other text.
+std::optional<PriorMode> priorModeFromName(const std::string& name);
 
 /// Not thread-safe (the matcher guards it with its state mutex).
 class PriorTracker {
@@ -134,13 +139,16 @@ class PriorTracker {
   /// A published match (stamp, pose, published (x, y, yaw) covariance) searched around `used`.
   /// It ends relocalization, unless an explicit pose newer than `used` is pending (a match that
   /// started before /initialpose does not cancel it).
+  /// log_likelihood_per_point: the match's (MatchResult), kept for
+  /// Prior::recent_log_likelihood_per_point (NaN: not kept).
   void onAccepted(double stamp_s, const Pose6& pose, const Eigen::Matrix3d& covariance_xyh,
-                  const Prior& used);
+                  const Prior& used, double log_likelihood_per_point = NAN);
   /// A search of the scan stamped stamp_s, around `used`, that ran but was not accepted (input
   /// problems and "no prior" do not count). A pending explicit pose that `used` came from is
   /// re-anchored at stamp_s to the pose `used` carried it to (when carried by odometry, or when
   /// it had no stamp): the explicit pose follows the vehicle's odometry while it is searched.
-  void onRejected(double stamp_s, const Prior& used);
+  /// collapsed: rejected by the likelihood-collapse rule (counts towards lost_after_collapses).
+  void onRejected(double stamp_s, const Prior& used, bool collapsed = false);
   /// Forgets everything (time went backwards) except the match history.
   void reset();
   /// After a reset: when an accepted match of the history lies within
@@ -167,7 +175,13 @@ class PriorTracker {
   };
   Prior carried(const Estimate& e, double scan_stamp_s, const OdometryBuffer* odometry) const;
   /// The global window when lost() (Prior::lost).
+  /// Also sets the prior's recent_log_likelihood_per_point.
   Prior widenIfLost(Prior p) const;
+  /// Median of recent_ll_ (NaN: none).
+  double recentLogLikelihood() const;
+  /// After a jump (distrust_posterior_): the posterior carried to ts lies farther than
+  /// jump_posterior_max_gap_m from the last accepted match carried to ts.
+  bool posteriorDisagrees(double ts, const OdometryBuffer* odometry) const;
 
   LocalizationPolicyOptions options_;
   bool has_posterior_ = false;
@@ -185,7 +199,10 @@ class PriorTracker {
   bool relocalizing_ = false;
   bool global_requested_ = false;
   int consecutive_rejections_ = 0;
-  int wide_rejections_ = 0;  ///< rejected in a row with a wide (not global) window
+  int wide_rejections_ = 0;          ///< rejected in a row with a wide (not global) window
+  int collapses_ = 0;                ///< rejected in a row by the likelihood-collapse rule
+  std::deque<double> recent_ll_;     ///< log-likelihoods per point of the recent accepted matches
+  bool distrust_posterior_ = false;  ///< a jump accepted, no tracking match from the EKF since
 };
 
 }  // namespace gmm_localization

@@ -91,6 +91,11 @@ struct GlobalSearchOptions {
   /// published pose, its covariance and its local certificate come from that search [m], [rad].
   double confirm_half_xy_m = 2.0;
   double confirm_half_heading_rad = 0.0524;  ///< 3 deg
+  /// Threads of the global search and of its certificate, the caller's included (0: one per
+  /// hardware thread): Registration runs them on a pool of their own when this differs from
+  /// RegistrationOptions::threads. The queues share little (the best leaf), so a preempted
+  /// worker delays its own queue only; a lost matcher has nothing else to do meanwhile.
+  int threads = 1;
 
   std::string validate() const;
 };

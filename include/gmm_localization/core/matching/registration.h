@@ -151,12 +151,17 @@ class RegistrationResult : public Result<T> {
 class Registration {
  public:
   /// Runs on `pool` when given (shared by several registrations), otherwise on a pool of its own
-  /// of options.threads threads (none for 1).
+  /// of options.threads threads (none for 1); the global search and its certificate likewise on
+  /// `global_pool`, else on a pool of options.global.threads (the same as `pool` when the
+  /// counts agree).
   explicit Registration(const RegistrationOptions& options,
-                        std::shared_ptr<TaskPool> pool = nullptr);
+                        std::shared_ptr<TaskPool> pool = nullptr,
+                        std::shared_ptr<TaskPool> global_pool = nullptr);
   const RegistrationOptions& options() const { return options_; }
   /// The pool the match runs on; null when it runs on the caller's thread alone.
   const std::shared_ptr<TaskPool>& pool() const { return pool_; }
+  /// The pool of the global search and its certificate; null: the caller's thread alone.
+  const std::shared_ptr<TaskPool>& globalPool() const { return global_pool_; }
 
   /// Registers `base_points` (base_link frame [m]) against `map`. Fails with a reason and its
   /// kind, never with a pose, for: invalid options or request, no points after filtering, scan
@@ -201,6 +206,7 @@ class Registration {
 
   RegistrationOptions options_;
   std::shared_ptr<TaskPool> pool_;
+  std::shared_ptr<TaskPool> global_pool_;
 };
 
 /// Height offset [m] (a multiple of the z step within +-range_m) that maximises the base-layer
