@@ -29,6 +29,15 @@ double GaussianMixture1D::logLikelihood(double z_m) const {
   return peak + std::log(sum);
 }
 
+PreparedMixture::PreparedMixture(const GaussianMixture1D& g) : n_(g.size()) {
+  for (int j = 0; j < n_; ++j) {
+    const GaussianComponent& c = g.component(j);
+    mean_[j] = c.mean_m;
+    sigma_[j] = c.sigma_m;
+    norm_[j] = std::log(static_cast<double>(c.weight)) - std::log(sigma_[j]) - kHalfLog2Pi;
+  }
+}
+
 std::vector<double> GaussianMixture1D::modes() const {
   std::vector<double> result;
   if (count_ == 0) return result;
@@ -46,8 +55,9 @@ std::vector<double> GaussianMixture1D::modes() const {
   const int samples =
       static_cast<int>(std::clamp(std::ceil((hi - lo) / (0.25 * sigma_min)), 2.0, 1.0e5));
   const double step = (hi - lo) / samples;
+  const PreparedMixture p(*this);  // logLikelihood without its logs per call
   std::vector<double> v(samples + 1);
-  for (int i = 0; i <= samples; ++i) v[i] = logLikelihood(lo + i * step);
+  for (int i = 0; i <= samples; ++i) v[i] = p.logLikelihood(lo + i * step);
   constexpr double kInvPhi = 0.61803398874989484820;
   for (int i = 0; i <= samples; ++i) {
     const bool rises_to = i == 0 || v[i] > v[i - 1];
@@ -58,7 +68,7 @@ std::vector<double> GaussianMixture1D::modes() const {
     for (int it = 0; it < 100 && b - a > 1e-9; ++it) {
       const double c = b - (b - a) * kInvPhi;
       const double d = a + (b - a) * kInvPhi;
-      if (logLikelihood(c) > logLikelihood(d)) {
+      if (p.logLikelihood(c) > p.logLikelihood(d)) {
         b = d;
       } else {
         a = c;
@@ -76,9 +86,10 @@ double GaussianMixture1D::maxLogLikelihood(double z_lo, double z_hi) const {
 double GaussianMixture1D::maxLogLikelihood(double z_lo, double z_hi,
                                            const std::vector<double>& modes) const {
   if (count_ == 0) return -std::numeric_limits<double>::infinity();
-  double best = std::max(logLikelihood(z_lo), logLikelihood(z_hi));
+  const PreparedMixture p(*this);
+  double best = std::max(p.logLikelihood(z_lo), p.logLikelihood(z_hi));
   for (double m : modes) {
-    if (m > z_lo && m < z_hi) best = std::max(best, logLikelihood(m));
+    if (m > z_lo && m < z_hi) best = std::max(best, p.logLikelihood(m));
   }
   return best;
 }
@@ -102,6 +113,16 @@ MixtureLogTerms::MixtureLogTerms(const GaussianMixture1D& g) {
   }
 }
 
+bool GaussianMixture1D::operator==(const GaussianMixture1D& o) const {
+  if (count_ != o.count_) return false;
+  for (int j = 0; j < count_; ++j) {
+    const auto& a = components_[j];
+    const auto& b = o.components_[j];
+    if (a.weight != b.weight || a.mean_m != b.mean_m || a.sigma_m != b.sigma_m) return false;
+  }
+  return true;
+}
+
 double MixtureLogTerms::logLikelihood(double z_m) const {
   if (count == 0) return -std::numeric_limits<double>::infinity();
   double t[kMaxMixtureComponents];
@@ -115,16 +136,6 @@ double MixtureLogTerms::logLikelihood(double z_m) const {
   double sum = 0.0;
   for (int j = 0; j < count; ++j) sum += std::exp(t[j] - peak);
   return peak + std::log(sum);
-}
-
-bool GaussianMixture1D::operator==(const GaussianMixture1D& o) const {
-  if (count_ != o.count_) return false;
-  for (int j = 0; j < count_; ++j) {
-    const auto& a = components_[j];
-    const auto& b = o.components_[j];
-    if (a.weight != b.weight || a.mean_m != b.mean_m || a.sigma_m != b.sigma_m) return false;
-  }
-  return true;
 }
 
 }  // namespace gmm_localization

@@ -96,37 +96,6 @@ WorkLayer nextLayer(const WorkLayer& prev, int extent, int h, bool coarsen_z) {
   return next;
 }
 
-/// log p(z) of a mixture with its per-component constants precomputed in double precision, so
-/// the base layer equals q(GaussianMixture1D::maxLogLikelihood) exactly.
-class PreparedMixture {
- public:
-  explicit PreparedMixture(const GaussianMixture1D& g) : n_(g.size()) {
-    for (int j = 0; j < n_; ++j) {
-      const GaussianComponent& c = g.component(j);
-      mean_[j] = c.mean_m;
-      sigma_[j] = c.sigma_m;
-      norm_[j] = std::log(static_cast<double>(c.weight)) - std::log(sigma_[j]) - kHalfLog2Pi;
-    }
-  }
-  double logLikelihood(double z) const {
-    double t[kMaxMixtureComponents];
-    double peak = -std::numeric_limits<double>::infinity();
-    for (int j = 0; j < n_; ++j) {
-      const double d = (z - mean_[j]) / sigma_[j];
-      t[j] = norm_[j] - 0.5 * d * d;
-      peak = std::max(peak, t[j]);
-    }
-    if (n_ <= 1 || !std::isfinite(peak)) return peak;
-    double sum = 0.0;
-    for (int j = 0; j < n_; ++j) sum += std::exp(t[j] - peak);
-    return peak + std::log(sum);
-  }
-
- private:
-  int n_;
-  double mean_[kMaxMixtureComponents], sigma_[kMaxMixtureComponents], norm_[kMaxMixtureComponents];
-};
-
 }  // namespace
 
 std::vector<double> mixtureModes(const GaussianMixture1D& g) { return g.modes(); }

@@ -1,7 +1,9 @@
 #pragma once
 // One map cell's model: a 1-D Gaussian mixture over z-height (paper section III, Eq. 1).
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -61,6 +63,32 @@ class GaussianMixture1D {
  private:
   std::array<GaussianComponent, kMaxMixtureComponents> components_{};
   uint8_t count_ = 0;
+};
+
+/// GaussianMixture1D::logLikelihood, bit for bit, with each component's log(w / sigma) -
+/// log(sqrt(2 pi)) computed once instead of per call (the same double operations in the same
+/// order): for the many evaluations of one mixture in modes() and in rasterization.
+class PreparedMixture {
+ public:
+  explicit PreparedMixture(const GaussianMixture1D& g);
+  double logLikelihood(double z_m) const {
+    double t[kMaxMixtureComponents];
+    double peak = -std::numeric_limits<double>::infinity();
+    for (int j = 0; j < n_; ++j) {
+      const double d = (z_m - mean_[j]) / sigma_[j];
+      t[j] = norm_[j] - 0.5 * d * d;
+      peak = std::max(peak, t[j]);
+    }
+    if (n_ <= 1 || !std::isfinite(peak)) return peak;  // log(exp(0)) = 0: the same for one
+    double sum = 0.0;
+    for (int j = 0; j < n_; ++j) sum += std::exp(t[j] - peak);
+    return peak + std::log(sum);
+  }
+
+ private:
+  int n_ = 0;
+  double mean_[kMaxMixtureComponents] = {}, sigma_[kMaxMixtureComponents] = {};
+  double norm_[kMaxMixtureComponents] = {};
 };
 
 /// A mixture prepared for fast repeated evaluation: per component the mean, 1/sigma and
