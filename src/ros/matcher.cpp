@@ -75,6 +75,7 @@ Matcher::Matcher(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& nam
 
   setupDiagnostics();
   worker_ = std::thread([this] { workerLoop(); });
+  global_worker_ = std::thread([this] { globalWorkerLoop(); });
   ROS_INFO("%s: matching scans in frame '%s' against map '%s'%s", name_.c_str(),
            options_.base_frame.c_str(), options_.map_frame.c_str(),
            options_.initial_pose_enabled ? " from the configured initial pose" : "");
@@ -93,7 +94,9 @@ Matcher::~Matcher() {
     stop_ = true;
   }
   queue_cv_.notify_all();
+  global_cv_.notify_all();
   if (worker_.joinable()) worker_.join();
+  if (global_worker_.joinable()) global_worker_.join();
 }
 
 }  // namespace node

@@ -101,6 +101,9 @@ LocalizationPolicyOptions loadLocalizationPolicyOptions(const ParamSource& nh) {
       param(nh, "window/global_max_half_xy_m", w.global_max_half_xy_m, 0.2, 100.0);
   w.global_max_half_heading_rad =
       param(nh, "window/global_max_half_heading_rad", w.global_max_half_heading_rad, 0.0, M_PI);
+  w.interim_half_xy_m = param(nh, "window/interim_half_xy_m", w.interim_half_xy_m, 0.2, 100.0);
+  w.interim_half_heading_rad =
+      param(nh, "window/interim_half_heading_rad", w.interim_half_heading_rad, 0.0, 1.6);
   AcceptancePolicyOptions& a = o.acceptance;
   a.min_log_likelihood_per_point = param(nh, "acceptance/min_log_likelihood_per_point",
                                          a.min_log_likelihood_per_point, -100.0, 10.0);

@@ -57,6 +57,21 @@ void Matcher::onScan(const sensor_msgs::PointCloud2::ConstPtr& msg) {
   queue_cv_.notify_one();
 }
 
+template <typename Fn>
+void Matcher::answerEvenIfThrows(const sensor_msgs::PointCloud2::ConstPtr& msg, uint32_t dropped,
+                                 Fn&& fn) {
+  try {
+    fn();
+  } catch (const std::exception& e) {
+    // Answered all the same: a status names the failure (and the scan counts as processed).
+    ROS_ERROR_THROTTLE(5.0, "%s: scan processing failed: %s", name_.c_str(), e.what());
+    publishFailure(msg, std::string("scan processing failed: ") + e.what(), dropped);
+  } catch (...) {
+    ROS_ERROR_THROTTLE(5.0, "%s: scan processing failed (unknown exception)", name_.c_str());
+    publishFailure(msg, "scan processing failed: unknown exception", dropped);
+  }
+}
+
 void Matcher::workerLoop() {
   while (true) {
     sensor_msgs::PointCloud2::ConstPtr msg;
@@ -69,16 +84,24 @@ void Matcher::workerLoop() {
       msg = std::move(next.item);
       dropped = next.dropped_before;
     }
-    try {
-      processScan(msg, dropped);
-    } catch (const std::exception& e) {
-      // Answered all the same: a status names the failure (and the scan counts as processed).
-      ROS_ERROR_THROTTLE(5.0, "%s: scan processing failed: %s", name_.c_str(), e.what());
-      publishFailure(msg, std::string("scan processing failed: ") + e.what(), dropped);
-    } catch (...) {
-      ROS_ERROR_THROTTLE(5.0, "%s: scan processing failed (unknown exception)", name_.c_str());
-      publishFailure(msg, "scan processing failed: unknown exception", dropped);
+    answerEvenIfThrows(msg, dropped, [&] { processScan(msg, dropped); });
+  }
+}
+
+void Matcher::globalWorkerLoop() {
+  while (true) {
+    GlobalJob job;
+    {
+      std::unique_lock<std::mutex> lock(session_mutex_);
+      global_cv_.wait(lock, [this] { return stop_ || global_job_.has_value(); });
+      if (stop_) return;
+      job = std::move(*global_job_);
+      global_job_.reset();
     }
+    answerEvenIfThrows(job.msg, job.dropped,
+                       [&] { runMatch(job.msg, std::move(job.scan), job.start, job.dropped); });
+    std::lock_guard<std::mutex> lock(session_mutex_);
+    global_busy_ = false;
   }
 }
 
@@ -149,8 +172,26 @@ void Matcher::processScan(const sensor_msgs::PointCloud2::ConstPtr& msg, uint32_
   MatchStart start;
   {
     std::lock_guard<std::mutex> lock(session_mutex_);
-    start = session_.beginMatch(scan);
+    start = session_.beginMatch(scan, /*global_available=*/!global_busy_);
+    if (start.global()) {
+      // The global search goes to its own worker; this one goes on with the next scans.
+      global_busy_ = true;
+      global_job_ = GlobalJob{msg, std::move(scan), start, dropped};
+    }
   }
+  if (!start.skip_reason.empty()) {  // answered at once: the global search has the cores
+    publishSkipped(msg->header.stamp, start.skip_reason, dropped);
+    return;
+  }
+  if (start.global()) {
+    global_cv_.notify_one();
+    return;
+  }
+  runMatch(msg, std::move(scan), start, dropped);
+}
+
+void Matcher::runMatch(const sensor_msgs::PointCloud2::ConstPtr& msg, ScanInput scan,
+                       const MatchStart& start, uint32_t dropped) {
   std::shared_ptr<const ChunkMap> map;
   {
     std::lock_guard<std::mutex> lock(map_mutex_);

@@ -34,17 +34,22 @@
 // the launch argument points_topic), scans but no pose to search around (/initialpose,
 // initial_pose/*), and an explicit pose rejected scan after scan with none accepted, even by
 // the global search once lost (core/localization/acquisition_watch.h).
-// Threads: ROS callbacks (serialised, non-blocking) and one worker. Scans wait in the session's
-// queue (scan_queue_size, oldest dropped when full, drops counted in the next status); the
-// worker takes the oldest. The session is not synchronised: session_mutex_ guards every call,
-// never held during a match. The worker searches a snapshot of the map (immutable shared
-// chunks): chunk callbacks never wait for a match.
+// Threads: ROS callbacks (serialised, non-blocking), one worker and one global worker. Scans
+// wait in the session's queue (scan_queue_size, oldest dropped when full, drops counted in the
+// next status); the worker takes the oldest. A scan whose prior is lost (the global window) goes
+// to the global worker when it is idle, and the worker goes on with the next scans while it
+// runs (MatchSessionState::beginMatch: skipped when the estimate is not trusted, else searched
+// in the interim window, Prior::interim): a search of seconds never stops the others.
+// The session is not synchronised: session_mutex_ guards every call, never held during a
+// match. Both workers search a snapshot of the map (immutable shared chunks): chunk callbacks
+// never wait for a match.
 
 #include <atomic>
 #include <condition_variable>
 #include <deque>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 
@@ -95,7 +100,14 @@ class Matcher {
   // matcher_worker.cpp: scan intake, the worker, one scan's processing.
   void onScan(const sensor_msgs::PointCloud2::ConstPtr& msg);
   void workerLoop();
+  void globalWorkerLoop();
   void processScan(const sensor_msgs::PointCloud2::ConstPtr& msg, uint32_t dropped);
+  /// Matches one converted scan from `start`, applies the outcome and publishes.
+  void runMatch(const sensor_msgs::PointCloud2::ConstPtr& msg, ScanInput scan,
+                const MatchStart& start, uint32_t dropped);
+  /// fn(), or the failure status of msg when it throws (the scan is answered all the same).
+  template <typename Fn>
+  void answerEvenIfThrows(const sensor_msgs::PointCloud2::ConstPtr& msg, uint32_t dropped, Fn&& fn);
   bool scanToBase(const sensor_msgs::PointCloud2& msg, ScanInput* scan, std::string* reason);
   void publishSkipped(const ros::Time& stamp, const std::string& reason, uint32_t dropped);
   /// The status of a scan whose processing threw (counted in the diagnostics).
@@ -128,13 +140,23 @@ class Matcher {
   std::condition_variable queue_cv_;
   MatcherSession session_;
   bool stop_ = false;
+  /// The global worker's scan (waiting or running); global_cv_ wakes it.
+  struct GlobalJob {
+    sensor_msgs::PointCloud2::ConstPtr msg;
+    ScanInput scan;
+    MatchStart start;
+    uint32_t dropped = 0;
+  };
+  std::optional<GlobalJob> global_job_;  ///< handed over, not yet taken
+  bool global_busy_ = false;             ///< a job handed over and not finished
+  std::condition_variable global_cv_;
 
   // The map: protocol state and the snapshot the worker searches.
   std::mutex map_mutex_;
   MapServerClient map_client_;
   std::shared_ptr<const ChunkMap> map_snapshot_;
 
-  std::thread worker_;
+  std::thread worker_, global_worker_;
 
   // Diagnostics (stats_mutex_; scan_rate_ is thread-safe on its own).
   std::mutex stats_mutex_;

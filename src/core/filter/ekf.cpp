@@ -166,6 +166,24 @@ FuseReport Ekf::processPose(const PoseMeasurement& pose) {
   return process(makePoseMeasurement(pose, options_), MeasurementSource::kPose, pose.stamp_s);
 }
 
+FuseReport Ekf::raiseCovarianceAt(double stamp_s, double sigma_xy_m, double sigma_yaw_rad) {
+  EkfMeasurement m;
+  m.source = MeasurementSource::kCovarianceFloor;
+  m.model = MeasurementModel::kCovarianceFloor;
+  m.stamp_s = stamp_s;
+  m.size = 3;
+  m.indices = {kStateX, kStateY, kStateYaw, 0, 0, 0};
+  m.z = MeasurementVector(3);
+  m.z << sigma_xy_m * sigma_xy_m, sigma_xy_m * sigma_xy_m, sigma_yaw_rad * sigma_yaw_rad;
+  m.R = MeasurementCovariance::Identity(3, 3);
+  Result<EkfMeasurement> r(std::move(m));
+  if (!std::isfinite(stamp_s) || !(sigma_xy_m >= 0.0) || !(sigma_yaw_rad >= 0.0) ||
+      !std::isfinite(sigma_xy_m) || !std::isfinite(sigma_yaw_rad)) {
+    r = Result<EkfMeasurement>::failure("covariance floor: stamp and sigmas must be finite, >= 0");
+  }
+  return process(r, MeasurementSource::kCovarianceFloor, stamp_s);
+}
+
 std::optional<FuseReport> Ekf::checkStamp(MeasurementSource source, double stamp_s) {
   const double latest = history_.latest().time_s;
   const double behind = latest - stamp_s;

@@ -127,6 +127,8 @@ const char* sourceName(MeasurementSource source) {
       return "twist";
     case MeasurementSource::kPose:
       return "pose";
+    case MeasurementSource::kCovarianceFloor:
+      return "covariance_floor";
     case MeasurementSource::kCount:
       break;
   }

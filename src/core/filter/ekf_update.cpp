@@ -9,6 +9,17 @@ namespace gmm_localization {
 UpdateResult applyMeasurement(const EkfMeasurement& m, double gate_threshold_sq,
                               double gravity_mps2, EkfState* state) {
   UpdateResult result;
+  if (m.model == MeasurementModel::kCovarianceFloor) {
+    for (int i = 0; i < m.size; ++i) {
+      const int k = m.indices[i];
+      const double v = std::max(state->P(k, k), m.z(i));
+      state->P.row(k).setZero();
+      state->P.col(k).setZero();
+      state->P(k, k) = v;
+    }
+    result.kind = UpdateResult::Kind::kFused;
+    return result;
+  }
   MeasurementVector h;
   MeasurementJacobian H;
   evaluateMeasurement(m, state->x, gravity_mps2, &h, &H);

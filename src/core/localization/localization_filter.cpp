@@ -223,7 +223,6 @@ FuseReport LocalizationFilter::addMatch(double stamp_s, const Pose6& pose,
   checkTime(r);
   if (r.outcome == FuseOutcome::kFused) {
     gate_run_ = 0;
-    last_fused_match_s_ = std::max(last_fused_match_s_, stamp_s);
   } else if (r.outcome == FuseOutcome::kRejectedGate && active_) {
     if (++gate_run_ >= options_.gate_lockout_count) {
       std::ostringstream s;
@@ -236,19 +235,11 @@ FuseReport LocalizationFilter::addMatch(double stamp_s, const Pose6& pose,
 }
 
 Status LocalizationFilter::inflate(FilterEventKind kind, double stamp_s, std::string detail) {
-  const Status st =
-      raiseCovariance(options_.relocalize_sigma_xy_m, options_.relocalize_sigma_yaw_rad);
-  if (!st) return st;
-  event(kind, stamp_s, std::move(detail));
-  return Status::success();
-}
-
-Status LocalizationFilter::raiseCovariance(double sigma_xy_m, double sigma_yaw_rad) {
   if (!active_) return Status::failure("filter not running");
   const EkfState& s = ekf_.state();
   Matrix6d c = s.poseCovariance();
-  const double vxy = sigma_xy_m * sigma_xy_m;
-  const double vh = sigma_yaw_rad * sigma_yaw_rad;
+  const double vxy = options_.relocalize_sigma_xy_m * options_.relocalize_sigma_xy_m;
+  const double vh = options_.relocalize_sigma_yaw_rad * options_.relocalize_sigma_yaw_rad;
   for (int i : {kStateX, kStateY, kStateYaw}) {
     const double v = std::max(c(i, i), i == kStateYaw ? vh : vxy);
     c.row(i).setZero();
@@ -258,6 +249,7 @@ Status LocalizationFilter::raiseCovariance(double sigma_xy_m, double sigma_yaw_r
   const Status st = ekf_.setPose(s.pose(), c, ekf_.time());
   if (!st) return st;
   gate_run_ = 0;
+  event(kind, stamp_s, std::move(detail));
   return Status::success();
 }
 
@@ -267,17 +259,25 @@ Status LocalizationFilter::relocalize(double stamp_s) {
 }
 
 void LocalizationFilter::onMatcherMode(double stamp_s, PriorMode mode) {
-  // A status older than a fused match (the two topics' callbacks may interleave) is stale.
-  if (stamp_s < last_fused_match_s_) return;
+  // The mode is the newest status's; an older one (the topics' callbacks interleave) only
+  // places its floor in the history.
+  const bool newest = !(stamp_s < last_status_s_);
   const PriorMode before = matcher_mode_;
-  matcher_mode_ = mode;
+  if (newest) {
+    last_status_s_ = stamp_s;
+    matcher_mode_ = mode;
+  }
   if (!active_ || (mode != PriorMode::kRelocalizing && mode != PriorMode::kLost)) return;
   const bool lost = mode == PriorMode::kLost;
   const double sxy = lost ? options_.lost_sigma_xy_m : options_.relocalize_sigma_xy_m;
   const double syaw = lost ? options_.lost_sigma_yaw_rad : options_.relocalize_sigma_yaw_rad;
-  // Every status in that mode keeps the floor (a fused match may have lowered it); the event
-  // is reported once per entry into the mode.
-  if (!raiseCovariance(sxy, syaw) || mode == before) return;
+  // Every status in that mode keeps the floor at its scan's stamp, in the history: a match that
+  // comes late (the global search's, seconds after its scan) is fused after the floors older
+  // than it and before the newer ones. The event is reported once per entry into the mode.
+  const FuseReport r = ekf_.raiseCovarianceAt(stamp_s, sxy, syaw);
+  if (!r.fused()) return;
+  gate_run_ = 0;
+  if (!newest || mode == before) return;
   std::ostringstream d;
   d << "the matcher is " << priorModeName(mode) << ": x, y, yaw sigmas raised to at least " << sxy
     << " m, " << syaw << " rad";
@@ -334,9 +334,8 @@ void LocalizationFilter::stop() {
   if (active_) ++stops_;
   active_ = false;
   gate_run_ = forward_jumps_ = 0;
-  // A new timeline (time went backwards) or a new start: earlier stamps count again.
-  last_fused_match_s_ = -std::numeric_limits<double>::infinity();
   matcher_mode_ = PriorMode::kNoPrior;
+  last_status_s_ = -std::numeric_limits<double>::infinity();  // a new timeline
 }
 
 Result<EkfState> LocalizationFilter::stateAt(double time_s) const {

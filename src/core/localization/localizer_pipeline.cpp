@@ -1,6 +1,7 @@
 #include "gmm_localization/core/localization/localizer_pipeline.h"
 
 #include <algorithm>
+#include <limits>
 
 #include "gmm_localization/core/common/option_checks.h"
 
@@ -9,7 +10,11 @@ namespace gmm_localization {
 std::string LocalizerPipelineOptions::validate() const {
   const std::string e = session.validate();
   if (!e.empty()) return e;
-  return rangeProblem("scan_arrival_delay_s", scan_arrival_delay_s, 0.0, 10.0);
+  std::string r = rangeProblem("scan_arrival_delay_s", scan_arrival_delay_s, 0.0, 10.0);
+  if (r.empty()) {
+    r = rangeProblem("global_search_latency_s", global_search_latency_s, -1.0, 600.0);
+  }
+  return r;
 }
 
 PosteriorEstimate posteriorFromState(const EkfState& state) {
@@ -86,13 +91,15 @@ void LocalizerPipeline::addScan(ScanInput scan, double processing_latency_s) {
     reports_.push_back(std::move(r));
     return;
   }
-  if (a.timeWentBackwards() && in_flight_) complete();
+  if (a.timeWentBackwards()) {
+    while (anyInFlight()) completeFirst();
+  }
   session_.enqueue(WaitingScan{std::move(scan), arrival, processing_latency_s});
   if (!in_flight_) startNext(arrival);
 }
 
 void LocalizerPipeline::flush() {
-  while (in_flight_) complete();
+  while (anyInFlight()) completeFirst();
 }
 
 std::vector<PipelineScanReport> LocalizerPipeline::takeReports() {
@@ -102,7 +109,13 @@ std::vector<PipelineScanReport> LocalizerPipeline::takeReports() {
 }
 
 void LocalizerPipeline::advanceTo(double t) {
-  while (in_flight_ && in_flight_->report.finish_s <= t) complete();
+  auto first = [this]() {
+    double f = std::numeric_limits<double>::infinity();
+    if (in_flight_) f = in_flight_->report.finish_s;
+    if (global_in_flight_) f = std::min(f, global_in_flight_->report.finish_s);
+    return f;
+  };
+  while (anyInFlight() && first() <= t) completeFirst();
 }
 
 void LocalizerPipeline::startNext(double now) {
@@ -114,22 +127,48 @@ void LocalizerPipeline::startNext(double now) {
     const auto state = filter_.stateAt(start_s);
     if (state.ok()) session_.setPosterior(posteriorFromState(state.value()));
   }
-  const MatchStart m = session_.beginMatch(w.scan);
+  const MatchStart m = session_.beginMatch(w.scan, /*global_available=*/!global_in_flight_);
   PipelineScanReport r;
   r.arrival_s = w.arrival_s;
   r.start_s = start_s;
   r.dropped_before = next.dropped_before;
+  if (!m.skip_reason.empty()) {  // answered at once, as the nodelet's worker does
+    r.finish_s = start_s;
+    r.match.stamp_s = w.scan.stamp_s;
+    r.match.input_points = w.scan.points.size();
+    r.match.outcome = MatchOutcome::kSkipped;
+    r.match.reason = m.skip_reason;
+    r.match.prior = m.prior;
+    r.match.mode_after = session_.tracker().mode();
+    filter_.onMatcherMode(r.match.stamp_s, r.match.mode_after);  // the status the EKF reads
+    reports_.push_back(std::move(r));
+    if (session_.hasWaiting()) startNext(start_s);
+    return;
+  }
   static const ChunkMap kEmpty;
   r.match = processor_.process(map_ ? *map_ : kEmpty, std::move(w.scan), m.prior, m.twistOrNull(),
                                options_.record_traversal, options_.clock);
-  const double latency = w.latency_s >= 0.0 ? w.latency_s : r.match.total_s;
+  double latency = w.latency_s >= 0.0 ? w.latency_s : r.match.total_s;
+  if (m.global() && options_.global_search_latency_s >= 0.0) {
+    latency = options_.global_search_latency_s;
+  }
   r.finish_s = start_s + std::max(0.0, latency);
+  if (m.global()) {
+    // The global worker takes it; the worker is free for the next scan at once.
+    global_in_flight_ = InFlight{std::move(r), m.epoch};
+    if (session_.hasWaiting()) startNext(start_s);
+    return;
+  }
   in_flight_ = InFlight{std::move(r), m.epoch};
 }
 
-void LocalizerPipeline::complete() {
-  InFlight f = std::move(*in_flight_);
-  in_flight_.reset();
+void LocalizerPipeline::completeFirst() {
+  const bool global_first =
+      global_in_flight_ &&
+      (!in_flight_ || global_in_flight_->report.finish_s < in_flight_->report.finish_s);
+  std::optional<InFlight>& slot = global_first ? global_in_flight_ : in_flight_;
+  InFlight f = std::move(*slot);
+  slot.reset();
   PipelineScanReport& r = f.report;
   // Matcher side: the outcome feeds the relocalization state machine (or is discarded).
   if (session_.finishMatch(f.epoch, &r.match) && r.match.accepted()) {
@@ -142,7 +181,7 @@ void LocalizerPipeline::complete() {
   filter_.onMatcherMode(r.match.stamp_s, r.match.mode_after);
   const double finish = r.finish_s;
   reports_.push_back(std::move(r));
-  if (session_.hasWaiting()) startNext(finish);
+  if (!in_flight_ && session_.hasWaiting()) startNext(finish);
 }
 
 }  // namespace gmm_localization

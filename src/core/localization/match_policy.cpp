@@ -53,7 +53,9 @@ std::string WindowPolicyOptions::validate() const {
       rangeProblem("window.global_max_half_xy_m", global_max_half_xy_m, wide_half_xy_m, 100.0),
       rangeProblem("window.global_max_half_heading_rad", global_max_half_heading_rad,
                    wide_half_heading_rad, M_PI),
-      rangeProblem("window.unknown_z_search_m", unknown_z_search_m, 0.0, 20.0));
+      rangeProblem("window.unknown_z_search_m", unknown_z_search_m, 0.0, 20.0),
+      rangeProblem("window.interim_half_xy_m", interim_half_xy_m, 0.2, 100.0),
+      rangeProblem("window.interim_half_heading_rad", interim_half_heading_rad, 0.0, 1.6));
   if (!e.empty()) return e;
   if (min_half_xy_m > max_half_xy_m) return "window.min_half_xy_m must be <= max_half_xy_m";
   if (min_half_heading_rad > max_half_heading_rad) {
@@ -229,20 +231,25 @@ AcceptanceDecision acceptanceRules(const MatchResult& r, const SearchWindow& win
 }  // namespace
 
 AcceptanceDecision acceptMatch(const MatchResult& r, const SearchWindow& window,
-                               const AcceptancePolicyOptions& o, bool wide, double recent_ll) {
+                               const AcceptancePolicyOptions& o, bool wide, double recent_ll,
+                               bool interim) {
   AcceptanceDecision d = acceptanceRules(r, window, o, wide);
   // The collapse is noted whatever rule rejects the match (a kidnapped scan often ends on the
-  // window's edge too), and rejects an otherwise acceptable one.
-  d.likelihood_collapsed = !wide && o.max_likelihood_drop > 0.0 && std::isfinite(recent_ll) &&
-                           !r.certificate.certified &&
-                           r.certificate.failure != CertificateFailure::kDisabled &&
+  // window's edge too), and rejects an otherwise acceptable one. An interim window (around an
+  // estimate the matcher has lost) counts a certified match too: a window without the truth
+  // may hold one unique wrong optimum.
+  const bool applies = interim || (!wide && !r.certificate.certified &&
+                                   r.certificate.failure != CertificateFailure::kDisabled);
+  d.likelihood_collapsed = applies && o.max_likelihood_drop > 0.0 && std::isfinite(recent_ll) &&
                            r.log_likelihood_per_point < recent_ll - o.max_likelihood_drop;
   if (d.accepted && d.likelihood_collapsed) {
     std::ostringstream s;
     s << std::fixed << std::setprecision(2) << "likelihood collapsed: log-likelihood per point "
       << r.log_likelihood_per_point << ", " << recent_ll - r.log_likelihood_per_point
-      << " below the recent median " << recent_ll << ", uncertified ("
-      << certificateFailureName(r.certificate.failure) << ")";
+      << " below the recent median " << recent_ll << ", "
+      << (r.certificate.certified
+              ? std::string("certified in an interim window")
+              : "uncertified (" + std::string(certificateFailureName(r.certificate.failure)) + ")");
     d.accepted = false;
     d.reason = s.str();
   }

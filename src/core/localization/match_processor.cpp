@@ -116,7 +116,7 @@ MatchReport MatchProcessor::process(const ChunkMap& map, ScanInput scan, const P
 
   const AcceptanceDecision d =
       acceptMatch(m, r.search_window, policy_.acceptance, prior.wide || prior.lost,
-                  prior.recent_log_likelihood_per_point);
+                  prior.recent_log_likelihood_per_point, prior.interim);
   if (!d.accepted) {
     r.likelihood_collapsed = d.likelihood_collapsed;
     return finish(MatchOutcome::kRejected, d.reason);

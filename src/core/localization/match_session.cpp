@@ -92,9 +92,23 @@ std::string MatchSessionState::requestGlobalSearch() {
   return {};
 }
 
-MatchStart MatchSessionState::beginMatch(const ScanInput& scan) const {
+MatchStart MatchSessionState::beginMatch(const ScanInput& scan, bool global_available) const {
   MatchStart s;
   s.prior = tracker_.priorAt(scan.stamp_s, &odometry_);
+  if (s.prior.lost && !global_available && tracker_.lostByRejections()) {
+    s.skip_reason =
+        "not searched: the localization is lost and the global search of an earlier scan is "
+        "running";
+  } else if (s.prior.lost && !global_available) {
+    // The global search of an earlier scan is running: this one is answered at the tracking
+    // rate, in the interim window around the same centre.
+    const WindowPolicyOptions& w = tracker_.options().window;
+    s.prior.lost = false;
+    s.prior.interim = true;
+    s.prior.wide = true;
+    s.prior.wide_window =
+        WindowExtent{w.interim_half_xy_m, w.interim_half_xy_m, w.interim_half_heading_rad};
+  }
   s.twist = deskewTwistFor(scan);
   s.epoch = epoch_;
   return s;

@@ -287,7 +287,7 @@ void PriorTracker::onAccepted(double stamp_s, const Pose6& pose,
   // The reference of the likelihood-collapse rule: a jump (wide or global window) starts it
   // again, from the place the vehicle was found. Until a posterior agrees with the matches
   // again (a tracking match searched around it is accepted), the posterior is checked.
-  if (used.wide || used.lost) {
+  if ((used.wide || used.lost) && !used.interim) {
     recent_ll_.clear();
     distrust_posterior_ = true;
   } else if (used.source == PriorSource::kEkf) {
@@ -367,12 +367,14 @@ void PriorTracker::reset() {
   distrust_posterior_ = false;
 }
 
-bool PriorTracker::lost() const {
+bool PriorTracker::lost() const { return global_requested_ || lostByRejections(); }
+
+bool PriorTracker::lostByRejections() const {
   const int n = options_.relocalization.lost_after_rejections;
   const int n_wide = options_.relocalization.lost_after_wide_rejections;
   const int n_collapse = options_.relocalization.lost_after_collapses;
-  return global_requested_ || (n > 0 && consecutive_rejections_ >= n) ||
-         (n_wide > 0 && wide_rejections_ >= n_wide) || (n_collapse > 0 && collapses_ >= n_collapse);
+  return (n > 0 && consecutive_rejections_ >= n) || (n_wide > 0 && wide_rejections_ >= n_wide) ||
+         (n_collapse > 0 && collapses_ >= n_collapse);
 }
 
 PriorMode PriorTracker::mode() const {

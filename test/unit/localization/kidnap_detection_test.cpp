@@ -188,10 +188,15 @@ TEST(LocalizationFilter, TheMatcherLostWidensTheCovarianceSoTheMatchThatFindsThe
   EXPECT_TRUE(f->takeEvents().empty());
   ASSERT_TRUE(f->addMatch(0.0, poseX(0.0), matchCov(0.05)).fused());
   double t = 0.0;
+  // Twists at 100 Hz; while lost_from <= t, a status every 0.1 s says the matcher is lost (its
+  // scans are skipped while the global search runs).
+  double lost_from = 1e9;
   auto feed = [&](double until) {
     for (; t < until - 1e-9;) {
       t += 0.01;
       f->addTwist(still(t));
+      const long k = std::lround(t * 100.0);
+      if (t >= lost_from && k % 10 == 0) f->onMatcherMode(t, PriorMode::kLost);
     }
   };
   feed(1.0);
@@ -218,14 +223,26 @@ TEST(LocalizationFilter, TheMatcherLostWidensTheCovarianceSoTheMatchThatFindsThe
   ASSERT_EQ(events.size(), 1u);
   EXPECT_EQ(events[0].kind, FilterEventKind::kMatcherLost);
 
-  // The global search found it from the scan at 1.5 s; its pose comes 3.5 s later.
+  // The global search found it from the scan at 1.5 s; its pose comes 3.5 s later, after the
+  // lost statuses of the scans skipped meanwhile. It is fused at its stamp, after the floor of
+  // 1.3 s (which lets it through the gate) and before theirs, which keep the sigma up.
+  lost_from = 1.55;
   feed(5.0);
+  EXPECT_TRUE(f->takeEvents().empty());  // still lost: no new entry
   EXPECT_EQ(f->addMatch(1.5, poseX(50.0), matchCov(0.05)).outcome, FuseOutcome::kFused);
   EXPECT_NEAR(f->ekf().state().x(kStateX), 50.0, 0.2);
+  EXPECT_GE(sigma(kStateX), o.lost_sigma_xy_m - 1e-9);
+  // Tracking again: the next match collapses it.
+  lost_from = 1e9;
+  f->onMatcherMode(5.0, PriorMode::kTracking);
+  EXPECT_EQ(f->addMatch(5.0, poseX(50.0), matchCov(0.05)).outcome, FuseOutcome::kFused);
   EXPECT_LT(sigma(kStateX), 1.0);
-  // A lost status of a scan older than that match (the topics' callbacks interleave) is stale.
+  EXPECT_NEAR(f->ekf().state().x(kStateX), 50.0, 0.1);
+  // A floor older than both matches goes before them in time: they are fused again after it;
+  // it is not the newest status, so no event.
   f->onMatcherMode(1.4, PriorMode::kLost);
   EXPECT_LT(sigma(kStateX), 1.0);
+  EXPECT_NEAR(f->ekf().state().x(kStateX), 50.0, 0.1);
   EXPECT_TRUE(f->takeEvents().empty());
 }
 

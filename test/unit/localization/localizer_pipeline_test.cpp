@@ -280,6 +280,69 @@ TEST_F(LocalizerPipelineTest, WidensAfterRejectedMatchesAndRecovers) {
   EXPECT_EQ(p.tracker().mode(), PriorMode::kTracking);
 }
 
+TEST_F(LocalizerPipelineTest, TheGlobalSearchRunsBesideTheWorkerAndTheScansMeanwhileAreAnswered) {
+  // Scans 3..6 see only a flat sheet 25 m up: three rejected tracking windows, then a rejected
+  // wide one makes the localization lost (lost_after_wide_rejections 1). Scan 7 is searched
+  // globally, which takes 1.9 s; the scans that arrive meanwhile are answered at once as skipped
+  // (the estimate is not trusted), none waits for the search nor is dropped, and the global
+  // match is fused when it finishes, after them.
+  LocalizerPipelineOptions o = options();
+  o.policy.window.global_max_half_xy_m = 20.0;
+  o.global_search_latency_s = 1.9;
+  auto created = LocalizerPipeline::create(o);
+  ASSERT_TRUE(created.ok()) << created.error();
+  LocalizerPipeline& p = created.value();
+  p.setMap(map_);
+  p.setConfiguredPose(offsetPose(truth(0.05), 0.5, 0.5, 0.0), true);
+  drive(p, kT0, 0.1, [](int k) {
+    if (k < 3 || k > 6) return scanAt(k);
+    PointList sky;
+    for (double x = -20; x <= 20; x += 0.5) {
+      for (double y = -20; y <= 20; y += 0.5) sky.emplace_back(x, y, 25.0f);
+    }
+    return sky;
+  });
+  const auto reports = p.takeReports();
+  ASSERT_EQ(reports.size(), 12u);
+  EXPECT_EQ(p.droppedScans(), 0u);
+  std::map<int, const PipelineScanReport*> by_scan;
+  std::vector<int> completion;
+  for (const auto& r : reports) {
+    const int k = static_cast<int>(std::lround((r.match.stamp_s - kT0 - 0.05) / kScanPeriod));
+    by_scan[k] = &r;
+    completion.push_back(k);
+  }
+  ASSERT_EQ(by_scan.size(), 12u);
+  // The global match (scan 7) completes after the three skipped scans that arrived while it ran.
+  EXPECT_EQ(completion, (std::vector<int>{0, 1, 2, 3, 4, 5, 6, 8, 9, 10, 7, 11}));
+  for (int k = 3; k <= 6; ++k) {
+    EXPECT_EQ(by_scan[k]->match.outcome, MatchOutcome::kRejected) << k;
+  }
+  EXPECT_EQ(by_scan[6]->match.mode_after, PriorMode::kLost);
+  const PipelineScanReport& global = *by_scan[7];
+  EXPECT_TRUE(global.match.prior.lost);
+  EXPECT_NEAR(global.finish_s - global.start_s, 1.9, 1e-9);
+  ASSERT_TRUE(global.match.accepted()) << global.match.reason;
+  expectNear(global.match.pose, truth(global.match.stamp_s - kT0), 0.05, 0.003, "global");
+  EXPECT_TRUE(global.fuse.fused()) << global.fuse.reason;
+  for (int k = 8; k <= 10; ++k) {
+    const PipelineScanReport& r = *by_scan[k];
+    EXPECT_EQ(r.match.outcome, MatchOutcome::kSkipped) << k;
+    EXPECT_NE(r.match.reason.find("global search of an earlier scan is running"), std::string::npos)
+        << r.match.reason;
+    EXPECT_EQ(r.match.mode_after, PriorMode::kLost) << k;
+    // Answered when it arrived, not after the global search.
+    EXPECT_NEAR(r.finish_s, r.arrival_s, 1e-9) << k;
+    EXPECT_LT(r.finish_s, global.finish_s) << k;
+  }
+  // After the jump: tracking around the EKF, which fused the global match.
+  const PipelineScanReport& last = *by_scan[11];
+  ASSERT_TRUE(last.match.accepted()) << last.match.reason;
+  EXPECT_FALSE(last.match.prior.lost);
+  expectNear(last.match.pose, truth(last.match.stamp_s - kT0), 0.05, 0.003, "after");
+  EXPECT_EQ(p.tracker().mode(), PriorMode::kTracking);
+}
+
 TEST_F(LocalizerPipelineTest, RecoversWhenTimeGoesBackwards) {
   auto created = LocalizerPipeline::create(options());
   ASSERT_TRUE(created.ok());

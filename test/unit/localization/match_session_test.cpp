@@ -406,6 +406,62 @@ TEST(MatchSession, AGlobalSearchRequestedSearchesTheGlobalWindowUntilAMatchOfItI
   EXPECT_FALSE(s.beginMatch(a).prior.lost);
 }
 
+TEST(MatchSession, WhileAGlobalSearchRunsALostPriorIsInterimOrSkipped) {
+  LocalizationPolicyOptions policy;
+  policy.window.global_max_half_xy_m = 40.0;
+  policy.window.interim_half_xy_m = 1.5;
+  policy.window.interim_half_heading_rad = 0.04;
+  Session s(MatchSessionOptions(), policy);
+  s.setConfiguredPose(poseAt(5.0, 5.0, 0.0), true);
+  const ScanInput a = scanAt(10.0);
+  MatchStart start = s.beginMatch(a);
+  MatchReport r = acceptedReport(a, start, 0.0, 0.0);
+  ASSERT_TRUE(s.finishMatch(start.epoch, &r));
+
+  // Asked for (the estimate was fine): the other scans are searched in the interim window
+  // around the same centre, with the certificate required; the global worker is busy.
+  ASSERT_EQ(s.requestGlobalSearch(), "");
+  const MatchStart global = s.beginMatch(a, /*global_available=*/true);
+  EXPECT_TRUE(global.prior.lost);
+  EXPECT_TRUE(global.global());
+  EXPECT_FALSE(global.prior.interim);
+  MatchStart interim = s.beginMatch(a, /*global_available=*/false);
+  EXPECT_TRUE(interim.skip_reason.empty()) << interim.skip_reason;
+  EXPECT_FALSE(interim.prior.lost);
+  EXPECT_FALSE(interim.global());
+  EXPECT_TRUE(interim.prior.interim);
+  EXPECT_TRUE(interim.prior.wide);
+  EXPECT_DOUBLE_EQ(interim.prior.wide_window.half_x_m, 1.5);
+  EXPECT_DOUBLE_EQ(interim.prior.wide_window.half_y_m, 1.5);
+  EXPECT_DOUBLE_EQ(interim.prior.wide_window.half_heading_rad, 0.04);
+  EXPECT_DOUBLE_EQ(interim.prior.pose.x, global.prior.pose.x);
+  EXPECT_DOUBLE_EQ(interim.prior.pose.y, global.prior.pose.y);
+  // An accepted interim match answers its scan but does not end the global request.
+  r = acceptedReport(a, interim, 0.05, 0.0);
+  ASSERT_TRUE(s.finishMatch(interim.epoch, &r));
+  EXPECT_EQ(s.tracker().mode(), PriorMode::kLost);
+  // A rejected interim window makes the localization lost by its rejections
+  // (lost_after_wide_rejections 1): the scans are skipped while the global search runs.
+  interim = s.beginMatch(a, false);
+  MatchReport rejected = reportWith(a, interim, MatchOutcome::kRejected);
+  ASSERT_TRUE(s.finishMatch(interim.epoch, &rejected));
+  ASSERT_TRUE(s.tracker().lostByRejections());
+  const MatchStart skipped = s.beginMatch(a, false);
+  EXPECT_NE(skipped.skip_reason.find("global search of an earlier scan is running"),
+            std::string::npos)
+      << skipped.skip_reason;
+  EXPECT_FALSE(skipped.global()) << "a skipped scan is not handed to the global worker";
+  EXPECT_TRUE(s.beginMatch(a, true).global());
+  // The global match accepted: tracking, no interim window even while a worker is busy.
+  r = acceptedReport(a, global, 0.3, 0.0);
+  ASSERT_TRUE(s.finishMatch(global.epoch, &r));
+  EXPECT_EQ(s.tracker().mode(), PriorMode::kTracking);
+  const MatchStart after = s.beginMatch(a, false);
+  EXPECT_TRUE(after.skip_reason.empty());
+  EXPECT_FALSE(after.prior.interim);
+  EXPECT_FALSE(after.prior.lost);
+}
+
 TEST(MatchSession, TheMatchStartsWithTheDeskewTwistWhenConfigured) {
   MatchSessionOptions o;
   Session s(o, LocalizationPolicyOptions());

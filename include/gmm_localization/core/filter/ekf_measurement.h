@@ -32,6 +32,7 @@ enum class MeasurementSource : int {
   kImuLinearAcceleration,  ///< body acceleration from an IMU specific force
   kTwist,                  ///< body twist from odometry (Applanix INS)
   kPose,                   ///< absolute pose in map (scan matcher, relocalization)
+  kCovarianceFloor,        ///< the matcher does not confirm the estimate: variances raised
   kCount
 };
 constexpr int kMeasurementSourceCount = static_cast<int>(MeasurementSource::kCount);
@@ -110,6 +111,10 @@ enum class MeasurementModel {
   kDirect,                    ///< z = x[indices]
   kAccelerationMinusGravity,  ///< z = specific force f; h(x) = a + R(roll, pitch)^T g_up
   kScaledTwist,               ///< INS twist: h(x) = (1 + s) v for vx, vy, vz rows, w for the rest
+  /// Not an observation: the indexed components' variances are raised to at least z (their
+  /// correlations dropped), never gated. Kept in the history like a measurement, so that a
+  /// pose fused later at an earlier stamp, or one stamped after it, sees it in time order.
+  kCovarianceFloor,
 };
 
 /// A validated measurement of `size` state components (at most 6).

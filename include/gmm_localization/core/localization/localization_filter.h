@@ -127,8 +127,9 @@ class LocalizationFilter {
   /// The matcher's prior mode after a scan stamped stamp_s (MatchReport::mode_after, the
   /// status's prior_mode): kRelocalizing raises x, y, yaw to at least the relocalization sigmas,
   /// kLost to at least the lost sigmas (an event on each entry into either mode); other modes
-  /// change nothing. Nothing happens while the filter is inactive, nor for a stamp older than
-  /// the newest fused match.
+  /// change nothing. The floor goes into the filter's history at stamp_s
+  /// (Ekf::raiseCovarianceAt), so matches are fused before or after it by their stamps, however
+  /// late they come. Nothing happens while the filter is inactive.
   void onMatcherMode(double stamp_s, PriorMode mode);
   /// Stops the filter (waits for an initial pose or a match).
   void stop();
@@ -149,11 +150,7 @@ class LocalizationFilter {
   LocalizationFilter(Ekf ekf, const FilterPolicyOptions& options)
       : ekf_(std::move(ekf)), options_(options) {}
   void checkTime(const FuseReport& report);
-  /// raiseCovariance to the relocalization sigmas, and the event.
   Status inflate(FilterEventKind kind, double stamp_s, std::string detail);
-  /// Raises the x, y, yaw variances to at least sigma_xy_m^2 and sigma_yaw_rad^2 (their
-  /// correlations dropped); fails when the filter is not running.
-  Status raiseCovariance(double sigma_xy_m, double sigma_yaw_rad);
   void event(FilterEventKind kind, double stamp_s, std::string detail);
   /// Feeds the kept IMU and twist samples stamped after stamp_s, in time order, then drops all.
   void replayPending(double stamp_s);
@@ -164,8 +161,8 @@ class LocalizationFilter {
   FilterPolicyOptions options_;
   bool active_ = false;
   int gate_run_ = 0;
-  PriorMode matcher_mode_ = PriorMode::kNoPrior;  ///< the last reported (onMatcherMode)
-  double last_fused_match_s_ = -std::numeric_limits<double>::infinity();
+  PriorMode matcher_mode_ = PriorMode::kNoPrior;  ///< of the newest status (onMatcherMode)
+  double last_status_s_ = -std::numeric_limits<double>::infinity();  ///< its stamp
   int forward_jumps_ = 0;
   uint64_t lockouts_ = 0;
   uint64_t stops_ = 0;

@@ -11,7 +11,10 @@
 //   3 as shipped): a scan that arrives while the worker is idle starts at once; one that
 //   arrives while it is busy waits in the queue, in arrival order; a scan arriving at a full
 //   queue drops the oldest waiting one (counted in the next report), exactly as the nodelet's
-//   worker. When a match finishes, the oldest waiting scan starts.
+//   worker. When a match finishes, the oldest waiting scan starts. A scan whose prior is lost
+//   goes to the global worker when it is idle (the nodelet's second thread), and the worker
+//   takes the next scan at once; while the global search runs, lost priors are interim ones
+//   (MatchSessionState::beginMatch). Matches complete in the order they finish.
 // - A match started at time t_start uses the EKF posterior at t_start (what the ekf nodelet
 //   last published) carried by odometry to the scan stamp; its result becomes available at
 //   t_start + processing_latency_s, when it is fused into the filter as a delayed measurement
@@ -45,7 +48,11 @@ struct LocalizerPipelineOptions {
   LocalizationPolicyOptions policy;
   MatchSessionOptions session;        ///< the matcher nodelet's session (and scan queue)
   double scan_arrival_delay_s = 0.0;  ///< scan available at stamp + this [s]
-  bool record_traversal = false;      ///< keep each search's traversal in its report
+  /// >= 0: a global search (a lost prior, run by the global worker) takes this long instead of
+  /// its scan's latency [s]; the global search takes seconds where a tracking match takes
+  /// tens of milliseconds.
+  double global_search_latency_s = -1.0;
+  bool record_traversal = false;  ///< keep each search's traversal in its report
   /// Optional clock [s] for the timings and for measured latencies (negative latency).
   std::function<double()> clock;
 
@@ -120,11 +127,14 @@ class LocalizerPipeline {
   };
 
   void advanceTo(double t);
-  /// Completes the running match; then the oldest waiting scan starts (unless it was discarded
-  /// by a reset).
-  void complete();
-  /// Starts the oldest waiting scan, not before `now` nor before it arrived.
+  /// Completes the running match that finishes first (the worker's or the global worker's);
+  /// then, when the worker is free, the oldest waiting scan starts (unless it was discarded by
+  /// a reset).
+  void completeFirst();
+  /// Starts the oldest waiting scan, not before `now` nor before it arrived; a global search
+  /// goes to the global worker and the next scan starts too.
   void startNext(double now);
+  bool anyInFlight() const { return in_flight_.has_value() || global_in_flight_.has_value(); }
 
   LocalizerPipelineOptions options_;
   LocalizationFilter filter_;
@@ -132,7 +142,8 @@ class LocalizerPipeline {
   MatchSession<WaitingScan> session_;
   std::shared_ptr<const ChunkMap> map_;
 
-  std::optional<InFlight> in_flight_;
+  std::optional<InFlight> in_flight_;         ///< the worker's match
+  std::optional<InFlight> global_in_flight_;  ///< the global worker's
   std::vector<PipelineScanReport> reports_;
 };
 

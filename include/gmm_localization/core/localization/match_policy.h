@@ -45,6 +45,11 @@ struct WindowPolicyOptions {
   /// docs/benchmarks.md), and far longer on real scans over a partial map.
   double global_max_half_xy_m = 50.0;         ///< [m]
   double global_max_half_heading_rad = M_PI;  ///< [rad]
+  /// While a global search runs (in its own worker), the other scans are searched around the
+  /// prior in at most this window (Prior::interim), so that they are answered at the tracking
+  /// rate instead of waiting for it [m], [rad].
+  double interim_half_xy_m = 2.0;
+  double interim_half_heading_rad = 0.0524;
 
   std::string validate() const;
 };
@@ -206,6 +211,11 @@ struct Prior {
   /// The localization is judged lost (RelocalizationPolicyOptions::lost_after_rejections): the
   /// window is the global one.
   bool lost = false;
+  /// Searched while a global search of an earlier scan runs: the window is
+  /// WindowPolicyOptions::interim_half_* (in wide_window, with wide set: the certificate is
+  /// required) and the likelihood collapse applies even to a certified match; not a jump when
+  /// accepted (MatchSessionState::beginMatch with global_available false).
+  bool interim = false;
   /// Which explicit pose (PriorTracker::setExplicitPose call, counted from 1) this prior came
   /// from; 0 for other sources. Lets a match that started before a newer explicit pose leave
   /// that pose pending.
@@ -239,12 +249,12 @@ struct AcceptanceDecision {
 
 /// Applies the acceptance rules in the order: finite result, map coverage, log-likelihood per
 /// point, search covariance, window edge, certificate (when required; `wide`: the prior was
-/// wide or lost, see require_certificate_wide), likelihood collapse (tracking windows only;
-/// recent_log_likelihood_per_point: the reference, NaN: none yet). `window` is discreteWindow()
-/// of the request.
+/// wide or lost, see require_certificate_wide), likelihood collapse (tracking windows, and
+/// interim ones whatever their certificate; recent_log_likelihood_per_point: the reference,
+/// NaN: none yet). `window` is discreteWindow() of the request.
 AcceptanceDecision acceptMatch(const MatchResult& result, const SearchWindow& window,
                                const AcceptancePolicyOptions& options, bool wide = false,
-                               double recent_log_likelihood_per_point = NAN);
+                               double recent_log_likelihood_per_point = NAN, bool interim = false);
 
 /// The 6x6 covariance published with a match: the (x, y, yaw) block from the search
 /// covariance (scaled) or the fixed sigmas, floored; z, roll, pitch from the fixed sigmas; no

@@ -79,7 +79,13 @@ struct MatchStart {
   Prior prior;
   std::optional<BodyTwist> twist;  ///< for deskewing; none: not deskewed
   uint64_t epoch = 0;              ///< give it back to finishMatch()
+  /// Not to be searched, and why (answered as skipped): the localization is lost by its
+  /// rejections and the global search of an earlier scan is running; a search around the
+  /// estimate would only take the cores from it. Empty: search.
+  std::string skip_reason;
   const BodyTwist* twistOrNull() const { return twist ? &*twist : nullptr; }
+  /// A global search (a lost prior, not skipped): the global worker's.
+  bool global() const { return skip_reason.empty() && prior.lost; }
 };
 
 /// The session rules that do not depend on the queued item type (see the file comment).
@@ -114,7 +120,11 @@ class MatchSessionState {
   std::string requestGlobalSearch();
 
   /// The prior, deskew twist and epoch for this scan's match.
-  MatchStart beginMatch(const ScanInput& scan) const;
+  /// global_available false: a global search of an earlier scan is still running, so a lost
+  /// prior becomes an interim one (Prior::interim) instead of a second global search when the
+  /// loss was asked for (global_localization: the estimate was fine), else the scan is skipped
+  /// (skip_reason).
+  MatchStart beginMatch(const ScanInput& scan, bool global_available = true) const;
   /// The deskew twist for this scan (none when deskew is off or no twist is known).
   std::optional<BodyTwist> deskewTwistFor(const ScanInput& scan) const;
   /// Applies the outcome of a match begun in `epoch` (see the file comment). Returns false when

@@ -162,8 +162,12 @@ class PriorTracker {
   /// lost_after_wide_rejections rejected matches of a wide window in a row, or a global search
   /// requested (requestRelocalization(true)); until a match is accepted.
   bool lost() const;
+  /// lost() by the rejections (not only by a global search asked for): the estimate itself is
+  /// not trusted.
+  bool lostByRejections() const;
   int consecutiveRejections() const { return consecutive_rejections_; }
   bool hasPosterior() const { return has_posterior_; }
+  const LocalizationPolicyOptions& options() const { return options_; }
   const PosteriorEstimate& posterior() const { return posterior_; }
 
  private:
