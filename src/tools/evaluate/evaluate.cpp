@@ -7,6 +7,7 @@
 
 #include "common/cli_args.h"
 #include "evaluate/evaluate_options.h"
+#include "evaluate/evaluate_summary.h"
 
 #ifndef GMM_CONFIG_DIR
 #define GMM_CONFIG_DIR "config"
@@ -63,6 +64,11 @@ int main(int argc, char** argv) {
     if (!results->info.traversal_image.empty()) writeResults(*results, cmd.out);
     std::printf("\n%s\nwritten to %s/ (summary.md, summary.json, *.csv)\n", md.c_str(),
                 cmd.out.c_str());
+    const std::string no_data = noDataReason(*results, summarizeResults(*results));
+    if (!no_data.empty()) {
+      std::fprintf(stderr, "evaluate: %s\n", no_data.c_str());
+      return 3;
+    }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "evaluate: %s\n", e.what());
     return 1;

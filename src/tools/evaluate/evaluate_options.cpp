@@ -65,6 +65,8 @@ Mode B, score a recording of a real replay (roslaunch gmm_localization replay.la
 
 Output: ekf.csv, matches.csv, offsets.csv, traversal.ppm (+ .json), summary.json, summary.md;
 scripts/plot_evaluation.py draws the figures and Table I from one or more output directories.
+Exit status: 0 scored; 1 failed (the reason on stderr); 2 bad arguments; 3 no data (neither an
+EKF estimate nor an accepted match met a ground-truth pose: the summary says so, no RMS).
 )";
 }
 

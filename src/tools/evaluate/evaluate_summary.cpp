@@ -151,6 +151,15 @@ Summary summarizeResults(const EvaluationResults& r) {
   return s;
 }
 
+std::string noDataReason(const EvaluationResults& r, const Summary& s) {
+  if (s.ekf.count > 0 || s.raw.count > 0) return {};
+  std::ostringstream o;
+  o << "no data: no EKF estimate and no accepted match had a ground-truth pose to compare with ("
+    << r.ekf.size() << " EKF samples, " << s.accepted << " accepted of " << s.scans
+    << " scans); no RMS is reported";
+  return o.str();
+}
+
 std::string summaryJson(const EvaluationResults& r, const Summary& s) {
   const RunInfo& i = r.info;
   const auto paper = paperRms(i.dataset);
@@ -163,6 +172,7 @@ std::string summaryJson(const EvaluationResults& r, const Summary& s) {
     << ",\n  \"speed_vs_real_time\": " << num(i.wall_s > 0 ? i.duration_s / i.wall_s : NAN)
     << ",\n  \"virtual_latency_s\": " << num(i.virtual_latency_s)
     << ",\n  \"scan_arrival_delay_s\": " << num(i.scan_arrival_delay_s)
+    << ",\n  \"no_data\": " << (noDataReason(r, s).empty() ? "false" : "true")
     << ",\n  \"ekf\": " << errorJson(s.ekf)
     << ",\n  \"ekf_localized\": " << errorJson(s.ekf_localized)
     << ",\n  \"ekf_unlocalized_samples\": " << s.ekf_unlocalized
@@ -215,6 +225,9 @@ std::string summaryMarkdown(const EvaluationResults& r, const Summary& s) {
     << fixed(i.duration_s, 1) << " s of driving, evaluated in " << fixed(i.wall_s, 1) << " s wall";
   if (i.wall_s > 0) o << " (" << fixed(i.duration_s / i.wall_s, 2) << "x real time)";
   o << ".\n\n";
+  const std::string no_data = noDataReason(r, s);
+  if (!no_data.empty())
+    o << "**No data**: " << no_data.substr(std::string("no data: ").size()) << ".\n\n";
   o << "| Table I | longitudinal RMS | lateral RMS | heading RMS | samples | match rate |\n"
     << "|---|---|---|---|---|---|\n";
   if (paper[0] > 0) {

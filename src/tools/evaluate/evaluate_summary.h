@@ -50,6 +50,10 @@ struct Summary {
 };
 
 Summary summarizeResults(const EvaluationResults& results);
+/// Why there is nothing to score: neither an EKF estimate nor an accepted match met a
+/// ground-truth pose (an empty bag, a wrong topic, a run that never localized). Empty when
+/// there is something; then an empty series alone is reported as none ("-", null), never 0 cm.
+std::string noDataReason(const EvaluationResults& results, const Summary& summary);
 std::string summaryJson(const EvaluationResults& results, const Summary& summary);
 std::string summaryMarkdown(const EvaluationResults& results, const Summary& summary);
 

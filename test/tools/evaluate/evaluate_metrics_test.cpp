@@ -1,6 +1,6 @@
 // The evaluation maths of `evaluate` (src/tools/evaluate/evaluate_metrics.h) on fixed inputs: time
 // association with the ground truth, the lateral / longitudinal decomposition, RMS and
-// quantiles, precision / recall, and the random offsets of Fig. 8.
+// quantiles, precision / recall, the random offsets of Fig. 8, and a summary over no data.
 #include "evaluate/evaluate_metrics.h"
 
 #include <cmath>
@@ -180,6 +180,41 @@ TEST(EvaluateSummary, CountsMatchesRateLatencyOffsetSuccessAndLocalizedSamples) 
   EXPECT_NEAR(s.latency_s.p50, 0.22, 1e-12);
   EXPECT_DOUBLE_EQ(s.offset_success, 3.0 / 5.0);
   EXPECT_DOUBLE_EQ(s.offset_accepted, 3.0 / 5.0);
+}
+
+TEST(EvaluateSummary, AnEvaluationOverNoDataSaysSoAndReportsNoRms) {
+  EvaluationResults r;
+  r.info.mode = "bag";
+  r.info.dataset = "downtown";
+  r.info.duration_s = 10.0;
+  MatchRow rejected;
+  rejected.outcome = "rejected";
+  rejected.total_ms = 40.0;
+  r.matches.assign(3, rejected);
+  Summary s = summarizeResults(r);
+  const std::string reason = noDataReason(r, s);
+  EXPECT_NE(reason.find("no data"), std::string::npos) << reason;
+  EXPECT_NE(reason.find("0 accepted of 3 scans"), std::string::npos) << reason;
+  const std::string md = summaryMarkdown(r, s);
+  EXPECT_NE(md.find("**No data**"), std::string::npos) << md;
+  EXPECT_EQ(md.find(" 0.0 cm"), std::string::npos) << "an RMS over zero samples:\n" << md;
+  EXPECT_EQ(md.find("| 0.00 cm"), std::string::npos) << md;
+  const std::string json = summaryJson(r, s);
+  EXPECT_NE(json.find("\"no_data\": true"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"count\": 0, \"rms_longitudinal_m\": null"), std::string::npos) << json;
+
+  // One EKF sample against the truth is something to score; the empty raw series alone is
+  // reported as none.
+  EkfRow e;
+  e.error.longitudinal_m = 0.03;
+  e.error.lateral_m = -0.02;
+  r.ekf.push_back(e);
+  s = summarizeResults(r);
+  EXPECT_EQ(noDataReason(r, s), "");
+  EXPECT_NE(summaryJson(r, s).find("\"no_data\": false"), std::string::npos);
+  EXPECT_EQ(summaryMarkdown(r, s).find("**No data**"), std::string::npos);
+  EXPECT_NEAR(s.ekf.rms_longitudinal_m, 0.03, 1e-12);
+  EXPECT_TRUE(std::isnan(s.raw.rms_longitudinal_m));
 }
 
 }  // namespace
