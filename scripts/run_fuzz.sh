@@ -17,7 +17,8 @@
 # (logs: $GMM_WS/fuzz_runs/logs/<target>.log). A reproducer of a bug belongs in
 # test/fuzz/regressions/<target>/ (docs/fuzzing.md), so that this pass replays it every run.
 # GMM_FUZZ_TARGETS selects targets (names without fuzz_, space-separated; default: all);
-# GMM_FUZZ_CXX the compiler (clang++-14); GMM_BUILD_LOCK a lock file that the build step (only)
+# GMM_FUZZ_CXX the compiler (clang++-14); GMM_BUILD_ONLY=1 stops after step 1 (see
+# run_sanitizers.sh); GMM_BUILD_LOCK a lock file that the build step (only)
 # holds with flock, for machines where builds are serialised. Exit status non-zero when the
 # build, the seeds, a regression or a fuzz run fails.
 set -euo pipefail
@@ -55,6 +56,10 @@ fi
 build ninja -C "$BUILD" -j"$JOBS" >"$BUILD/build.log" 2>&1 ||
   { tail -n 80 "$BUILD/build.log"; echo "[fuzz] build failed" >&2; exit 1; }
 built=$SECONDS
+if [ "${GMM_BUILD_ONLY:-0}" = 1 ]; then
+  echo "[fuzz] built in $((built - start)) s (GMM_BUILD_ONLY: not run)"
+  exit 0
+fi
 
 mapfile -t all < <(find "$GMM_REPO/test/fuzz" -maxdepth 1 -name 'fuzz_*.cpp' -printf '%f\n' |
   sed 's/^fuzz_//; s/\.cpp$//' | sort)

@@ -18,7 +18,9 @@
 # Logs: $GMM_WS/sanitizers/<asan|tsan>/<test>.log; a failing test's report is printed. Exit status
 # non-zero when a build or a test fails. GMM_SANITIZERS selects the passes ("asan tsan" by default;
 # empty: none); GMM_JOBS the parallel compile jobs and test runs (default: nproc);
-# GMM_ASAN_CXX and GMM_TSAN_CXX the compilers (clang++-14 and g++ by default, see below).
+# GMM_ASAN_CXX and GMM_TSAN_CXX the compilers (clang++-14 and g++ by default, see below);
+# GMM_BUILD_ONLY=1 builds the passes' tests and runs none (scripts/run_tests.sh builds them
+# beside the rostests, then runs this script again, whose builds are then up to date).
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/env.sh"
 # shellcheck source=job_pool.sh
@@ -152,6 +154,10 @@ pass() {
   ninja -C "$build" -j"$JOBS" "${targets[@]}" >"$build/build.log" 2>&1 ||
     { tail -n 80 "$build/build.log"; echo "[sanitizers] $name: build failed" >&2; return 1; }
   local built=$SECONDS
+  if [ "${GMM_BUILD_ONLY:-0}" = 1 ]; then
+    echo "[sanitizers] $name: built in $((built - start)) s (GMM_BUILD_ONLY: not run)"
+    return 0
+  fi
   local failed=0
   run_pass "$name" "$build" "${targets[@]}" || failed=$?
   echo "[sanitizers] $name: build $((built - start)) s, tests $((SECONDS - built)) s," \
