@@ -1,7 +1,10 @@
 // Matcher inputs other than scans: INS odometry, EKF posterior, initial pose, map (matcher.h).
 #include <cmath>
+#include <optional>
+#include <string>
 
 #include "gmm_localization/core/common/types.h"
+#include "gmm_localization/core/raster/window_coverage.h"
 #include "gmm_localization/ros/ekf_node_conversions.h"
 #include "gmm_localization/ros/matcher.h"
 #include "gmm_localization/ros/pose_conversion.h"
@@ -69,19 +72,43 @@ void Matcher::onInitialPose(const geometry_msgs::PoseWithCovarianceStamped::Cons
 }
 
 bool Matcher::onGlobalLocalization(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
-  std::string refused;
+  const LocalizationPolicyOptions& p = options_.policy;
+  const double half = p.window.global_max_half_xy_m;
+  // The estimate the search will be centred on: the prior at the newest INS odometry.
+  std::optional<Pose6> centre;
   {
+    std::lock_guard<std::mutex> lock(session_mutex_);
+    if (session_.tracker().mode() != PriorMode::kNoPrior) {
+      const double t = session_.odometry().empty() ? session_.tracker().posterior().stamp_s
+                                                   : session_.odometry().newest().stamp_s;
+      const Prior prior = session_.tracker().priorAt(t, &session_.odometry());
+      if (prior.valid()) centre = prior.pose;
+    }
+  }
+  // Outside the map the server holds there is nothing to search; a window larger than it is
+  // searched over the loaded part (said in the answer).
+  std::string refused, coverage;
+  if (centre) {
+    std::lock_guard<std::mutex> lock(map_mutex_);
+    static const ChunkMap kEmpty;
+    const WindowCoverage c =
+        windowCoverage(map_snapshot_ ? *map_snapshot_ : kEmpty, centre->x, centre->y, half, half);
+    coverage = describeWindowCoverage(c, centre->x, centre->y, half);
+    if (!c.centre_loaded) {
+      refused = "the current estimate is outside the loaded map: " + coverage +
+                "; give a pose on the map on /initialpose";
+    }
+  }
+  if (refused.empty()) {
     std::lock_guard<std::mutex> lock(session_mutex_);
     refused = session_.requestGlobalSearch();
   }
-  const LocalizationPolicyOptions& p = options_.policy;
   res.success = refused.empty();
-  res.message = res.success ? "global search armed: +-" +
-                                  std::to_string(static_cast<int>(p.window.global_max_half_xy_m)) +
+  res.message = res.success ? "global search armed: +-" + std::to_string(static_cast<int>(half)) +
                                   " m and +-" +
                                   std::to_string(static_cast<int>(std::lround(
                                       p.window.global_max_half_heading_rad * 180.0 / M_PI))) +
-                                  " deg around the current estimate from the next scan"
+                                  " deg around the current estimate from the next scan; " + coverage
                             : "global search refused: " + refused;
   ROS_INFO("%s: %s", name_.c_str(), res.message.c_str());
   return true;

@@ -216,6 +216,9 @@ TEST(VehicleRobustness, GlobalLocalizationService) {
   EXPECT_TRUE(call.response.success) << call.response.message;
   EXPECT_NE(call.response.message.find("global search armed"), std::string::npos)
       << call.response.message;
+  // It says how much of the window the map server holds (the fixture's town is 250 m across).
+  EXPECT_NE(call.response.message.find("% of the +-50 m window around"), std::string::npos)
+      << call.response.message;
   // Let scans through the merger to the matcher (0.1-0.2 s of sim time behind the player), then
   // hold the clock while the search runs (seconds of wall time on one thread; a vehicle drops
   // the scans meanwhile, counted).
@@ -274,6 +277,12 @@ TEST(VehicleRobustness, VehicleOffTheMap) {
            s.reason.find("off the map") != std::string::npos;
   });
   EXPECT_GE(off, 1u) << describeStatuses(kOffMapAt, kBackAt);
+  // A global search around an estimate outside the loaded map is refused, with the reason.
+  std_srvs::Trigger call;
+  ASSERT_TRUE(ros::service::call("/localization/global_localization", call));
+  EXPECT_FALSE(call.response.success) << call.response.message;
+  EXPECT_NE(call.response.message.find("outside the loaded map"), std::string::npos)
+      << call.response.message;
   // Nothing is matched from there (a scan already in the worker may still finish).
   EXPECT_EQ(
       countStatuses(kOffMapAt + 0.4, kBackAt, [](const MatchStatus& s) { return s.accepted; }), 0u)

@@ -1,6 +1,9 @@
 #include "gmm_localization/core/localization/match_processor.h"
 
 #include <cmath>
+#include <string>
+
+#include "gmm_localization/core/raster/window_coverage.h"
 
 namespace gmm_localization {
 namespace {
@@ -95,11 +98,22 @@ MatchReport MatchProcessor::process(const ChunkMap& map, ScanInput scan, const P
   const Registration& registration = prior.z_known ? tracking_ : unknown_z_;
   std::vector<TraversalNode>* traversal = want_traversal ? &r.traversal : nullptr;
   auto match = registration.match(map, scan.points, request, traversal, now, &r.timing);
+  // A global window larger than the map the server holds is searched over the loaded part
+  // only: a rejection says how much of it that was.
+  auto globalCoverage = [&]() -> std::string {
+    if (!prior.lost) return {};
+    const WindowCoverage c =
+        windowCoverage(map, prior.pose.x, prior.pose.y, r.window.half_x_m, r.window.half_y_m);
+    if (c.loaded_share >= 0.999) return {};
+    return " (global search: " +
+           describeWindowCoverage(c, prior.pose.x, prior.pose.y, r.window.half_x_m) + ")";
+  };
   if (!match.ok()) {
     // Off the map, too little coverage, empty after filtering: a failed attempt (counts
     // towards relocalization only when points were left to search with).
     const bool no_points = match.errorKind() == RegistrationError::kNoPoints;
-    return finish(no_points ? MatchOutcome::kSkipped : MatchOutcome::kRejected, match.error());
+    return finish(no_points ? MatchOutcome::kSkipped : MatchOutcome::kRejected,
+                  match.error() + globalCoverage());
   }
   r.has_result = true;
   r.result = std::move(match).value();
@@ -119,7 +133,7 @@ MatchReport MatchProcessor::process(const ChunkMap& map, ScanInput scan, const P
                   prior.recent_log_likelihood_per_point, prior.interim);
   if (!d.accepted) {
     r.likelihood_collapsed = d.likelihood_collapsed;
-    return finish(MatchOutcome::kRejected, d.reason);
+    return finish(MatchOutcome::kRejected, d.reason + globalCoverage());
   }
   r.pose = m.pose;
   // A certificate switched off proves nothing either way: the covariance stays as it was.
