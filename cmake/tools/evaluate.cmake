@@ -8,6 +8,7 @@ add_library(gmm_evaluate STATIC
   src/tools/evaluate/evaluate_integrity.cpp
   src/tools/evaluate/evaluate_localize.cpp
   src/tools/evaluate/evaluate_map.cpp
+  src/tools/evaluate/evaluate_map_frame.cpp
   src/tools/evaluate/evaluate_metrics.cpp
   src/tools/evaluate/evaluate_offsets.cpp
   src/tools/evaluate/evaluate_options.cpp
@@ -28,7 +29,8 @@ target_compile_definitions(evaluate PRIVATE GMM_CONFIG_DIR="${CMAKE_CURRENT_SOUR
 if(CATKIN_ENABLE_TESTING)
   # The evaluation maths, the YAML parameter source and the bag reader (no master; the bag
   # reader's test writes a temporary bag).
-  foreach(test_name evaluate_metrics_test evaluate_params_test evaluate_bag_test)
+  foreach(test_name evaluate_metrics_test evaluate_params_test evaluate_bag_test
+      evaluate_map_frame_test)
     catkin_add_gtest(tools_${test_name} test/tools/evaluate/${test_name}.cpp
       WORKING_DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR})
     target_link_libraries(tools_${test_name} gmm_evaluate gtest_main)

@@ -3,9 +3,11 @@
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <stdexcept>
 
 #include "common/cli_args.h"
+#include "evaluate/evaluate_map_frame.h"
 #include "evaluate/evaluate_options.h"
 #include "evaluate/evaluate_summary.h"
 
@@ -50,6 +52,15 @@ int main(int argc, char** argv) {
     gmm_localization::Result<EvaluationResults> results =
         gmm_localization::Result<EvaluationResults>::failure("not run");
     TraversalFigure traversal;
+    std::optional<MapFrame> map_frame;
+    if (!cmd.map_poses.empty()) {  // read first: a wrong directory fails before the long run
+      auto f = MapFrame::load(cmd.map_poses);
+      if (!f) {
+        std::fprintf(stderr, "evaluate: %s\n", f.error().c_str());
+        return 1;
+      }
+      map_frame = std::move(*f);
+    }
     if (cmd.mode == EvaluateCommand::Mode::kBag) {
       results = runBagEvaluation(cmd.bag, std::cout, &traversal);
     } else {
@@ -58,6 +69,11 @@ int main(int argc, char** argv) {
     if (!results) {
       std::fprintf(stderr, "evaluate: %s\n", results.error().c_str());
       return 1;
+    }
+    results->info.world = cmd.world;
+    if (map_frame) {
+      results->info.map_poses = cmd.map_poses;
+      applyMapFrame(*map_frame, *results);
     }
     const std::string md = writeResults(*results, cmd.out);  // creates the directory
     writeTraversal(traversal, cmd.out, results->info);

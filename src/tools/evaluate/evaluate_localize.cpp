@@ -210,6 +210,7 @@ class BagRun {
         row.has_pose = true;
         row.pose = planar(m.result.pose, m.stamp_s);
         row.error = vehicleFrameError(row.pose, *truth);
+        row.truth = *truth;
       }
     }
     auto labels = labels_.find(m.stamp_s);

@@ -63,6 +63,14 @@ Mode B, score a recording of a real replay (roslaunch gmm_localization replay.la
     [--gt-topic /ground_truth/odom] [--ekf-topic /localization/odometry]
     [--status-topic /localization/status] [--ekf-rate HZ (0: all)]
 
+Both modes:
+    --world LABEL           a label of the simulated world (e.g. perfect, imperfect), kept in
+                            summary.json and used by plot_evaluation.py to group Table I
+    --map-poses DIR         a map built from inexact poses: DIR holds the poses it was built
+                            from (poses.txt) and their truth (poses_truth.txt, written by
+                            simulate --map-pose-error); the errors are also reported against
+                            the truth moved into the map's frame, and the map's own error
+
 Output: ekf.csv, matches.csv, offsets.csv, traversal.ppm (+ .json), summary.json, summary.md;
 scripts/plot_evaluation.py draws the figures and Table I from one or more output directories.
 Exit status: 0 scored; 1 failed (the reason on stderr); 2 bad arguments; 3 no data (neither an
@@ -103,6 +111,10 @@ EvaluateCommand parseEvaluateCommand(int argc, char** argv, const std::string& d
       b.bag = r.bag = v;
     } else if (key == "--out") {
       c.out = v;
+    } else if (key == "--world") {
+      c.world = v;
+    } else if (key == "--map-poses") {
+      c.map_poses = v;
     } else if (key == "--dataset") {
       b.dataset = r.dataset = v;
     } else if (key == "--gt-topic") {

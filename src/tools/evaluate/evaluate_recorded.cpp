@@ -53,6 +53,7 @@ MatchRow rowOf(const MatchStatus& s, const Trajectory& truth) {
       r.has_pose = true;
       r.pose = planarFromPose(s.pose.pose, r.stamp_s);
       r.error = vehicleFrameError(r.pose, *t);
+      r.truth = *t;
     }
   }
   return r;

@@ -36,16 +36,28 @@ std::string integrityColumns(const IntegrityFields& f) {
   return s.str();
 }
 
+/// The map-frame columns (empty without --map-poses or where the map holds nothing).
+std::string mapFrameColumns(const MapFrameErrors& m) {
+  if (!m.valid) return ",,,";
+  std::ostringstream s;
+  s << std::setprecision(16) << m.map.longitudinal_m << ',' << m.map.lateral_m << ','
+    << m.in_map.longitudinal_m << ',' << m.in_map.lateral_m;
+  return s.str();
+}
+constexpr const char* kMapFrameHeader =
+    "map_longitudinal_m,map_lateral_m,in_map_longitudinal_m,in_map_lateral_m";
+
 void writeEkf(const std::vector<EkfRow>& rows, const std::string& path) {
   std::ofstream f = openFile(path);
   f << "t,x,y,z,yaw,gt_x,gt_y,gt_z,gt_yaw,longitudinal_m,lateral_m,yaw_err_rad,sigma_x_m,"
-       "sigma_y_m,sigma_yaw_rad\n";
+       "sigma_y_m,sigma_yaw_rad,"
+    << kMapFrameHeader << '\n';
   for (const EkfRow& r : rows) {
     f << r.t << ',' << r.estimate.x << ',' << r.estimate.y << ',' << r.estimate.z << ','
       << r.estimate.yaw << ',' << r.truth.x << ',' << r.truth.y << ',' << r.truth.z << ','
       << r.truth.yaw << ',' << r.error.longitudinal_m << ',' << r.error.lateral_m << ','
       << r.error.yaw_rad << ',' << r.sigma_x_m << ',' << r.sigma_y_m << ',' << r.sigma_yaw_rad
-      << '\n';
+      << ',' << mapFrameColumns(r.map_frame) << '\n';
   }
 }
 
@@ -56,7 +68,8 @@ void writeMatches(const std::vector<MatchRow>& rows, const std::string& path) {
        "map_coverage,filter_ms,search_ms,refine_ms,total_ms,latency_s,dropped_before,fuse,"
        "has_pose,x,y,yaw,longitudinal_m,lateral_m,yaw_err_rad,obst_tp,obst_fp,obst_fn,obst_tn,"
        "certified,certificate_failure,protection_xy_m,protection_heading_rad,"
-       "separation_per_point,truth_deficit_per_point,certificate_ms\n";
+       "separation_per_point,truth_deficit_per_point,certificate_ms,"
+    << kMapFrameHeader << '\n';
   for (const MatchRow& r : rows) {
     f << r.stamp_s << ',' << r.outcome << ',' << csvText(r.reason) << ',' << r.prior_source << ','
       << (r.wide ? 1 : 0) << ',' << r.window_half_x_m << ',' << r.window_half_heading_rad << ','
@@ -67,7 +80,7 @@ void writeMatches(const std::vector<MatchRow>& rows, const std::string& path) {
       << ',' << r.pose.x << ',' << r.pose.y << ',' << r.pose.yaw << ',' << r.error.longitudinal_m
       << ',' << r.error.lateral_m << ',' << r.error.yaw_rad << ',' << r.obstacles.tp << ','
       << r.obstacles.fp << ',' << r.obstacles.fn << ',' << r.obstacles.tn << ','
-      << integrityColumns(r.integrity) << '\n';
+      << integrityColumns(r.integrity) << ',' << mapFrameColumns(r.map_frame) << '\n';
   }
 }
 

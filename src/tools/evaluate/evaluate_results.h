@@ -15,12 +15,22 @@
 namespace gmm_localization {
 namespace eval {
 
+/// With `evaluate --map-poses` (evaluate_map_frame.h): the map's own error where the vehicle
+/// is (the truth in the map's frame against the truth) and the estimate against the truth in
+/// the map's frame (the localization's own error). Both valid only when `valid`.
+struct MapFrameErrors {
+  bool valid = false;
+  VehicleFrameError map;
+  VehicleFrameError in_map;
+};
+
 /// The EKF output at one time against the ground truth (Fig. 10).
 struct EkfRow {
   double t = 0.0;
   PoseStamped2 estimate, truth;
   VehicleFrameError error;
   double sigma_x_m = 0.0, sigma_y_m = 0.0, sigma_yaw_rad = 0.0;
+  MapFrameErrors map_frame;
 };
 
 /// A registration's certificate and the truth's score deficit (docs/integrity.md).
@@ -51,8 +61,9 @@ struct MatchRow {
   uint32_t dropped_before = 0;
   std::string fuse;       ///< the EKF's verdict on an accepted match ("" when not offered)
   bool has_pose = false;  ///< a registration result with ground truth at the stamp
-  PoseStamped2 pose;
+  PoseStamped2 pose, truth;
   VehicleFrameError error;
+  MapFrameErrors map_frame;
   Confusion obstacles;  ///< this scan's classification (labelled clouds only)
   IntegrityFields integrity;
 };
@@ -90,6 +101,8 @@ struct ObstacleStats {
 struct RunInfo {
   std::string mode;     ///< "bag" (mode A) or "recorded" (mode B)
   std::string dataset;  ///< downtown | snowy | any label (chooses the paper's row)
+  std::string world;    ///< a label of the simulated world (e.g. perfect, imperfect); may be empty
+  std::string map_poses;  ///< --map-poses directory (empty: errors against the exact truth only)
   std::string bag;
   std::string map;
   double duration_s = 0.0;          ///< bag time span evaluated [s]

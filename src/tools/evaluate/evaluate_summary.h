@@ -27,14 +27,18 @@ struct Summary {
   ErrorSummary ekf_localized;
   size_t ekf_unlocalized = 0;  ///< samples left out of ekf_localized
   ErrorSummary raw;            ///< accepted scan matches against ground truth
-  size_t scans = 0;            ///< scans in the evaluated span (processed + dropped)
-  size_t processed = 0;        ///< scans the matcher worked on
-  size_t accepted = 0;         ///< accepted (published) matches
-  size_t fused = 0;            ///< accepted matches the EKF fused
-  double match_rate_hz = 0;    ///< accepted / duration
-  double accepted_share = 0;   ///< accepted / scans
-  Quantiles latency_s;         ///< result available - scan stamp, accepted matches
-  Quantiles processing_ms;     ///< measured matcher time per processed scan
+  /// With --map-poses (evaluate_map_frame.h), over the rows where the map holds something:
+  /// the EKF and the raw matches against the truth in the map's frame (the localization's
+  /// own error), and the map's own error at the EKF samples' truth.
+  ErrorSummary ekf_in_map, raw_in_map, map_error;
+  size_t scans = 0;           ///< scans in the evaluated span (processed + dropped)
+  size_t processed = 0;       ///< scans the matcher worked on
+  size_t accepted = 0;        ///< accepted (published) matches
+  size_t fused = 0;           ///< accepted matches the EKF fused
+  double match_rate_hz = 0;   ///< accepted / duration
+  double accepted_share = 0;  ///< accepted / scans
+  Quantiles latency_s;        ///< result available - scan stamp, accepted matches
+  Quantiles processing_ms;    ///< measured matcher time per processed scan
   // Fig. 8
   size_t offset_trials = 0;
   double offset_success = NAN;   ///< share within 0.5 m

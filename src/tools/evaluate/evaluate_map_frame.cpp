@@ -1,0 +1,123 @@
+#include "evaluate/evaluate_map_frame.h"
+
+#include <cmath>
+#include <map>
+
+#include "evaluate/evaluate_results.h"
+#include "gmm_localization/core/mapping/kitti_source.h"
+
+namespace gmm_localization {
+namespace eval {
+namespace {
+
+Eigen::Isometry3d toIsometry(const PoseStamped2& p) {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.linear() = (Eigen::AngleAxisd(p.yaw, Eigen::Vector3d::UnitZ()) *
+                Eigen::AngleAxisd(p.pitch, Eigen::Vector3d::UnitY()) *
+                Eigen::AngleAxisd(p.roll, Eigen::Vector3d::UnitX()))
+                   .toRotationMatrix();
+  t.translation() = Eigen::Vector3d(p.x, p.y, p.z);
+  return t;
+}
+
+PoseStamped2 fromIsometry(const Eigen::Isometry3d& t, double stamp) {
+  const Eigen::Matrix3d r = t.linear();
+  PoseStamped2 p;
+  p.t = stamp;
+  p.x = t.translation().x();
+  p.y = t.translation().y();
+  p.z = t.translation().z();
+  p.yaw = std::atan2(r(1, 0), r(0, 0));
+  p.pitch = std::asin(std::clamp(-r(2, 0), -1.0, 1.0));
+  p.roll = std::atan2(r(2, 1), r(2, 2));
+  return p;
+}
+
+Result<std::vector<Eigen::Isometry3d>> readPoses(const std::string& path) {
+  auto poses = readKittiPoses(path);
+  if (!poses) return Result<std::vector<Eigen::Isometry3d>>::failure(poses.error());
+  std::vector<Eigen::Isometry3d> out;
+  int expected = 0;
+  for (const auto& [index, pose] : *poses) {
+    if (index != expected++) {
+      return Result<std::vector<Eigen::Isometry3d>>::failure(
+          path + ": scan " + std::to_string(expected - 1) + " has no pose");
+    }
+    out.push_back(pose);
+  }
+  return out;
+}
+
+}  // namespace
+
+Result<MapFrame> MapFrame::load(const std::string& directory) {
+  const std::string map_path = directory + "/poses.txt";
+  const std::string truth_path = directory + "/poses_truth.txt";
+  auto map_poses = readPoses(map_path);
+  if (!map_poses) return Result<MapFrame>::failure("--map-poses: " + map_poses.error());
+  auto true_poses = readPoses(truth_path);
+  if (!true_poses) {
+    return Result<MapFrame>::failure("--map-poses: " + true_poses.error() +
+                                     " (simulate --map-pose-error writes it beside poses.txt)");
+  }
+  auto frame = fromPoses(*map_poses, *true_poses);
+  if (!frame) return Result<MapFrame>::failure("--map-poses " + directory + ": " + frame.error());
+  return frame;
+}
+
+Result<MapFrame> MapFrame::fromPoses(const std::vector<Eigen::Isometry3d>& map_poses,
+                                     const std::vector<Eigen::Isometry3d>& true_poses) {
+  if (map_poses.empty() || map_poses.size() != true_poses.size()) {
+    return Result<MapFrame>::failure(std::to_string(map_poses.size()) + " map poses against " +
+                                     std::to_string(true_poses.size()) +
+                                     " true poses (the same scans are needed, at least one)");
+  }
+  MapFrame f;
+  for (size_t i = 0; i < map_poses.size(); ++i) {
+    const Eigen::Isometry3d e = map_poses[i] * true_poses[i].inverse();
+    const Eigen::AngleAxisd aa(e.linear());
+    f.positions_.push_back(true_poses[i].translation());
+    f.rotation_.push_back(aa.angle() * aa.axis());
+    f.translation_.push_back(e.translation());
+  }
+  return f;
+}
+
+std::optional<PoseStamped2> MapFrame::toMapFrame(const PoseStamped2& truth) const {
+  const Eigen::Vector2d at(truth.x, truth.y);
+  double weight = 0.0;
+  Eigen::Vector3d rot = Eigen::Vector3d::Zero(), trans = Eigen::Vector3d::Zero();
+  for (size_t i = 0; i < positions_.size(); ++i) {
+    const double d = (positions_[i].head<2>() - at).norm();
+    if (d > kRadiusM) continue;
+    const double w = std::exp(-0.5 * (d / kSigmaM) * (d / kSigmaM));
+    weight += w;
+    rot += w * rotation_[i];
+    trans += w * translation_[i];
+  }
+  if (!(weight > 0.0)) return std::nullopt;
+  rot /= weight;
+  trans /= weight;
+  Eigen::Isometry3d e = Eigen::Isometry3d::Identity();
+  if (rot.norm() > 0.0)
+    e.linear() = Eigen::AngleAxisd(rot.norm(), rot.normalized()).toRotationMatrix();
+  e.translation() = trans;
+  return fromIsometry(e * toIsometry(truth), truth.t);
+}
+
+void applyMapFrame(const MapFrame& frame, EvaluationResults& results) {
+  for (EkfRow& row : results.ekf) {
+    const auto m = frame.toMapFrame(row.truth);
+    if (!m) continue;
+    row.map_frame = {true, vehicleFrameError(*m, row.truth), vehicleFrameError(row.estimate, *m)};
+  }
+  for (MatchRow& row : results.matches) {
+    if (!row.has_pose) continue;
+    const auto m = frame.toMapFrame(row.truth);
+    if (!m) continue;
+    row.map_frame = {true, vehicleFrameError(*m, row.truth), vehicleFrameError(row.pose, *m)};
+  }
+}
+
+}  // namespace eval
+}  // namespace gmm_localization
