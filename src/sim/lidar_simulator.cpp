@@ -238,9 +238,9 @@ void LidarSimulator::trace(const Task& task) const {
         snap.surface(r.hit, &m, &label, &n);
         const Eigen::Vector3f d(r.ray.dir_x, r.ray.dir_y, r.ray.dir_z);
         const float cos_inc = std::abs(n.normalized().dot(d));
-        if (m == Material::kAsphalt) {
+        if (m == Material::kAsphalt) {  // paint, or a repaved stretch (map aging)
           const float x = r.ray.org_x + r.ray.tfar * d.x(), y = r.ray.org_y + r.ray.tfar * d.y();
-          if (w.town->markingAt(x, y)) m = Material::kLaneMarking;
+          m = roadSurfaceAt(*w.town, w.aging, x, y);
         }
         ret = lidarResponse(cfg, key, m, r.ray.tfar, cos_inc);
       }

@@ -7,7 +7,9 @@ namespace sim {
 
 const MaterialResponse& materialResponse(Material m) {
   // Diffuse reflectivities near 905 nm (asphalt ~0.05-0.1, concrete ~0.25, vegetation ~0.3-0.5
-  // in NIR but porous, snow ~0.6-0.8, retroreflective sheeting saturates the receiver).
+  // in NIR but porous, snow ~0.6-0.8, retroreflective sheeting saturates the receiver). Fresh
+  // asphalt is black bitumen over the aggregate; it lightens as traffic wears the binder off,
+  // so a new surface returns about half the power of a worn one.
   static const MaterialResponse kTable[] = {
       {0.07f, 0.0f, 0.000f},   // kAsphalt
       {0.22f, 0.0f, 0.000f},   // kConcrete
@@ -27,6 +29,7 @@ const MaterialResponse& materialResponse(Material m) {
       {0.15f, 0.0f, 0.000f},   // kPerson
       {0.60f, 0.0f, 0.000f},   // kSnow
       {0.50f, 0.0f, 0.000f},   // kLaneMarking
+      {0.035f, 0.0f, 0.000f},  // kAsphaltNew
   };
   static_assert(sizeof(kTable) / sizeof(kTable[0]) == static_cast<std::size_t>(Material::kCount),
                 "material table out of date");

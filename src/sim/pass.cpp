@@ -30,6 +30,7 @@ PassConfig PassConfig::defaults(PassType type, uint64_t seed) {
   PassConfig c;
   c.type = type;
   c.seed = seed;
+  c.aging.seed = hashKeys(static_cast<uint64_t>(type), seed, 0xA6Eull);
   if (type == PassType::kDowntown) {
     c.moving_cars_per_km2 = 40.0;
     c.pedestrians_per_km2 = 150.0;
@@ -64,8 +65,8 @@ Status PassConfig::validate() const {
   else if (!(snowfall_mean_range_m > 0.0 && snowfall_max_range_m >= 1.0))
     os << "snowfall ranges must be positive (mean " << snowfall_mean_range_m << ", max "
        << snowfall_max_range_m << ")";
-  if (os.str().empty()) return Status::success();
-  return Status::failure(std::string("PassConfig.") + os.str());
+  if (!os.str().empty()) return Status::failure(std::string("PassConfig.") + os.str());
+  return aging.validate();
 }
 
 bool Actor::continuousOver(double t0, double t1) const {

@@ -16,13 +16,14 @@ SimulationConfig SimulationConfig::defaults(PassType type, uint64_t pass_seed) {
   c.kinematics.seed = hashKeys(key, 0x4B1ull);
   c.noise_seed = hashKeys(key, 0x11Dull);
   c.ins.seed = hashKeys(key, 0x125ull);
+  c.extrinsic_error.seed = hashKeys(key, 0xE47ull);
   return c;
 }
 
 Status SimulationConfig::validate() const {
-  for (const Status& s :
-       {town.validate(), route.validate(), kinematics.validate(), pass.validate(),
-        rig.validate(1.0 / lidar.rotation_rate_hz), lidar.validate(), ins.validate()}) {
+  for (const Status& s : {town.validate(), route.validate(), kinematics.validate(), pass.validate(),
+                          rig.validate(1.0 / lidar.rotation_rate_hz), extrinsic_error.validate(),
+                          lidar.validate(), ins.validate()}) {
     if (!s) return s;
   }
   if (!(start_offset_m >= 0.0))
@@ -54,7 +55,9 @@ Result<std::unique_ptr<Simulation>> Simulation::create(const SimulationConfig& c
   auto world = World::create(*sim->town_, config.pass, config.threads);
   if (!world) return R::failure(world.error());
   sim->world_ = *world;
-  sim->lidar_ = std::make_unique<LidarSimulator>(sim->world_, *sim->trajectory_, config.rig,
+  // Rays leave the true mounts; run() merges and deskews with the nominal config.rig.
+  sim->lidar_ = std::make_unique<LidarSimulator>(sim->world_, *sim->trajectory_,
+                                                 perturbedRig(config.rig, config.extrinsic_error),
                                                  config.lidar, config.noise_seed, config.threads);
 
   const Trajectory& tr = *sim->trajectory_;

@@ -288,6 +288,7 @@ class TownBuilder {
              trunk_h + 0.6, 6, {Material::kBark, kLabelStatic});
     const double rh = rng.uniform(1.8, 3.5), rv = rng.uniform(1.5, 3.0);
     const Vector3d center(p.x(), p.y(), gz + trunk_h + 0.8 * rv);
+    town_.trees_.push_back({center, rh, rv});  // recorded only: no draw, mesh unchanged
     const int blobs = 5 + rng.uniformInt(3);
     for (int k = 0; k < blobs; ++k) {
       const Vector3d off(rng.uniform(-0.5, 0.5) * rh, rng.uniform(-0.5, 0.5) * rh,

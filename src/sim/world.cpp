@@ -1,5 +1,6 @@
 #include "gmm_localization/sim/world.h"
 
+#include <algorithm>
 #include <cstring>
 #include <string>
 
@@ -50,6 +51,7 @@ World::World() : impl_(std::make_unique<Impl>()) {}
 World::~World() = default;
 const Town& World::town() const { return *impl_->town; }
 const PassContents& World::pass() const { return impl_->pass; }
+const MapAging& World::aging() const { return impl_->aging; }
 size_t World::numStaticTriangles() const { return impl_->static_mesh.numTriangles(); }
 
 double World::surfaceHeight(double x, double y) const {
@@ -66,6 +68,24 @@ Result<std::shared_ptr<World>> World::create(const Town& town, const PassConfig&
   Impl& w = *world->impl_;
   w.town = &town;
   w.pass = preparePass(town, pass_config);
+  if (pass_config.type != PassType::kMapping) {
+    // The town a few months after the mapping drive; parked cars cannot stand in a fenced
+    // site or under a container.
+    w.aging = planMapAging(town, pass_config.aging);
+    auto& cars = w.pass.parked;
+    const size_t before = cars.size();
+    cars.erase(std::remove_if(cars.begin(), cars.end(),
+                              [&](const ParkedCar& c) {
+                                Footprint f;
+                                f.center = c.center;
+                                f.yaw_rad = c.yaw_rad;
+                                f.half_length_m = 0.5 * c.shape.length_m;
+                                f.half_width_m = 0.5 * c.shape.width_m;
+                                return w.aging.blocks(f);
+                              }),
+               cars.end());
+    w.aging.removed_parked_cars = before - cars.size();
+  }
   const std::string cfg = "threads=" + std::to_string(std::max(1, threads));
   w.device = rtcNewDevice(cfg.c_str());
   if (w.device == nullptr) return R::failure("embree: rtcNewDevice(\"" + cfg + "\") failed");
@@ -90,6 +110,12 @@ Result<std::shared_ptr<World>> World::create(const Town& town, const PassConfig&
     const Eigen::Vector3d g(car.center.x(), car.center.y(),
                             world->surfaceHeight(car.center.x(), car.center.y()));
     addCar(w.static_mesh, g, car.yaw_rad, car.shape, car.label);
+  }
+  if (!w.aging.empty()) {
+    const World* self = world.get();
+    addMapAgingMesh(
+        town, w.aging, [self](double x, double y) { return self->surfaceHeight(x, y); },
+        &w.static_mesh);
   }
   if (w.snow) w.static_mesh.append(buildSnowbanks(town, pass_config, *w.snow));
   if (extra) w.static_mesh.append(*extra);

@@ -8,6 +8,7 @@
 #include <optional>
 #include <vector>
 
+#include "gmm_localization/sim/map_aging.h"
 #include "gmm_localization/sim/mesh.h"
 #include "gmm_localization/sim/snow.h"
 #include "gmm_localization/sim/world.h"
@@ -25,6 +26,7 @@ struct World::Impl {
   std::vector<TriangleMesh> actor_meshes;
   std::optional<SnowCover> snow;
   std::function<double(double, double)> cover_depth;  // empty without snow
+  MapAging aging;  // empty unless an aged localization pass (repaved stretches shade the road)
   ~Impl();
 };
 

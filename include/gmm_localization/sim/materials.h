@@ -25,6 +25,7 @@ enum class Material : uint8_t {
   kPerson,       ///< pedestrians
   kSnow,         ///< snow cover and snowbanks
   kLaneMarking,  ///< paint (only as a shading result, never on a triangle)
+  kAsphaltNew,   ///< fresh asphalt of a repaved stretch (map aging; only as a shading result)
   kCount
 };
 
@@ -40,7 +41,7 @@ const MaterialResponse& materialResponse(Material m);
 /// Ground-truth labels carried by every simulated point (PointCloud2 field `label`).
 enum PointLabel : uint8_t {
   kLabelStatic = 0,   ///< structure present in the mapping pass (incl. thin snow cover on ground)
-  kLabelDynamic = 1,  ///< moving actors, and parked cars that differ from the mapping pass
+  kLabelDynamic = 1,  ///< moving actors, changed parked cars, map-aging objects (map_aging.h)
   kLabelSnow = 2,     ///< falling snow and snowbanks
 };
 

@@ -2,11 +2,12 @@
 // Passes over the same town. The mapping pass is the reference whose clouds build the map;
 // localization passes differ from it: `downtown` adds moving cars and pedestrians and changes
 // some parked cars; `snowy` adds falling snow, a snow cover that raises and smooths the ground,
-// snowbanks along the curbs, and hides lane paint.
+// snowbanks along the curbs, and hides lane paint. Either localization pass can also be aged
+// (map_aging.h: construction sites, containers, grown trees, repaved stretches).
 //
 // Labels (PointLabel): 0 static structure (also unchanged parked cars and the thin snow cover,
-// which is the ground surface raised by 5-15 cm), 1 moving actors and parked cars that differ
-// from the mapping pass, 2 falling snow and snowbanks.
+// which is the ground surface raised by 5-15 cm, and repaved road), 1 moving actors, parked cars
+// that differ from the mapping pass and map-aging objects, 2 falling snow and snowbanks.
 
 #include <string>
 #include <vector>
@@ -14,6 +15,7 @@
 #include <Eigen/Geometry>
 
 #include "gmm_localization/core/common/result.h"
+#include "gmm_localization/sim/map_aging.h"
 #include "gmm_localization/sim/town.h"
 #include "gmm_localization/sim/vehicle_mesh.h"
 
@@ -44,6 +46,9 @@ struct PassConfig {
   double snowfall_returns_per_ray = 0.015;  ///< probability that a ray returns from a flake
   double snowfall_mean_range_m = 4.0;       ///< flake returns: 1 m + exponential with this mean
   double snowfall_max_range_m = 15.0;
+  /// What else changed since the mapping drive (localization passes only; ignored for mapping).
+  /// The seed defaults to one derived from the pass type and seed.
+  MapAgingConfig aging;
 
   /// Defaults of each pass type (mapping: no actors; downtown: 40 cars and 150 pedestrians per
   /// km^2; snowy: 25 and 60, plus snow).

@@ -1,7 +1,9 @@
 #pragma once
 // The sensor rig: HDL-32E mounts on the roof (extrinsics base_link -> velodyne_N), their
 // revolution phases, and the ego vehicle's body (rays that hit it are dropped, as a
-// self-filter would).
+// self-filter would). ExtrinsicErrorConfig and perturbedRig() model a vehicle whose calibration
+// is slightly wrong: the true mounts (used for ray casting) differ from the nominal ones (what
+// the consumer is told in /tf_static and what merging and deskewing use).
 
 #include <string>
 #include <vector>
@@ -39,6 +41,38 @@ struct RigConfig {
 
   Status validate(double period_s) const;
 };
+
+enum class ExtrinsicErrorMode { kNone, kRealistic };
+
+/// "none" or "realistic"; anything else is a failure naming the value.
+Result<ExtrinsicErrorMode> parseExtrinsicErrorMode(const std::string& name);
+
+/// Per-sensor calibration error: each mount's true pose differs from the nominal one by a
+/// translation of random direction and a rotation about a random axis (both uniform on the
+/// sphere), with magnitudes uniform in [min, max]. Deterministic for (seed, sensor index).
+/// Defaults: the band of a careful but not perfect target/motion-based calibration.
+struct ExtrinsicErrorConfig {
+  ExtrinsicErrorMode mode = ExtrinsicErrorMode::kNone;
+  double translation_min_m = 0.01;
+  double translation_max_m = 0.02;
+  double rotation_min_deg = 0.1;
+  double rotation_max_deg = 0.2;
+  uint64_t seed = 1;
+  /// 0 <= min <= max, translation max <= 0.5 m, rotation max <= 10 deg.
+  Status validate() const;
+};
+
+/// The true rig: sensor k's mount becomes (R_err R_nominal, t_nominal + dt) with dt and the
+/// rotation R_err (about the sensor's own origin, axes of base_link) drawn as described above.
+/// Mode none returns `nominal` unchanged. Frames, phases and ego boxes are kept.
+RigConfig perturbedRig(const RigConfig& nominal, const ExtrinsicErrorConfig& config);
+
+/// How `truth` differs from `nominal` (both base_link -> sensor), in base_link.
+struct MountError {
+  Eigen::Vector3d translation_m;  ///< t_true - t_nominal
+  Eigen::Vector3d rotation_rad;   ///< rotation vector (axis x angle) of R_true R_nominal^T
+};
+MountError mountError(const SensorMount& nominal, const SensorMount& truth);
 
 }  // namespace sim
 }  // namespace gmm_localization

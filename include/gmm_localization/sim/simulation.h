@@ -35,7 +35,11 @@ struct SimulationConfig {
   RouteConfig route;
   KinematicsConfig kinematics;
   PassConfig pass;
+  /// The nominal rig: what merging, deskewing and a writer's /tf_static use.
   RigConfig rig = RigConfig::fourRoofCorners();
+  /// Calibration error: rays are cast from perturbedRig(rig, extrinsic_error), the true mounts
+  /// (Simulation::lidar().rig()), so the outputs carry the error a miscalibrated vehicle has.
+  ExtrinsicErrorConfig extrinsic_error;
   Hdl32eConfig lidar;
   InsConfig ins;
   /// Segment of the route: start [m along the route], and the first of distance/duration
@@ -52,7 +56,8 @@ struct SimulationConfig {
   bool emit_deskewed = false;
 
   /// Defaults for a pass type: pass contents, and per-pass seeds for kinematics (speeds,
-  /// stops, lane wander), LIDAR noise and INS, so passes over the same town differ.
+  /// stops, lane wander), LIDAR noise, INS and the extrinsic error, so passes over the same
+  /// town differ.
   static SimulationConfig defaults(PassType type, uint64_t pass_seed = 1);
   Status validate() const;
 };
@@ -131,6 +136,7 @@ class Simulation {
   const Route& route() const { return *route_; }
   const Trajectory& trajectory() const { return *trajectory_; }
   const World& world() const { return *world_; }
+  /// The ray caster; lidar().rig() is the true (perturbed) rig, config().rig the nominal one.
   const LidarSimulator& lidar() const { return *lidar_; }
   /// Segment [begin, end] in trajectory time, and the cycles (merged scans) inside it.
   double beginTime() const { return t_begin_; }

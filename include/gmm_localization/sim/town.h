@@ -31,6 +31,14 @@ struct Walkway {
   Eigen::Vector2d a, b;
 };
 
+/// A street tree's canopy: the ellipsoid its foliage blobs are clustered in (blob centres lie
+/// within +-rh/2 horizontally and +-0.4 rv vertically of `center`).
+struct TreeCrown {
+  Eigen::Vector3d center;  ///< map frame [m]
+  double radius_h_m;       ///< horizontal semi-axis rh
+  double radius_v_m;       ///< vertical semi-axis rv
+};
+
 /// Lateral offsets of lane centres from the road centreline [m] (positive = right of travel).
 struct LaneOffsets {
   double inner_m;    ///< inner traffic lane (used by moving traffic)
@@ -65,6 +73,8 @@ class Town {
   const TriangleMesh& objects() const { return objects_; }
   const std::vector<ParkingSlot>& parkingSlots() const { return parking_; }
   const std::vector<Walkway>& walkways() const { return walkways_; }
+  /// The street trees' canopies, in the order they were built (meshes are in objects()).
+  const std::vector<TreeCrown>& trees() const { return trees_; }
 
   /// Index of the road centreline nearest to v in `lines` (ascending).
   static int nearestLine(const std::vector<double>& lines, double v);
@@ -77,6 +87,7 @@ class Town {
   TriangleMesh objects_;
   std::vector<ParkingSlot> parking_;
   std::vector<Walkway> walkways_;
+  std::vector<TreeCrown> trees_;
 };
 
 }  // namespace sim

@@ -1,6 +1,7 @@
 #pragma once
-// World: the town plus one pass (parked cars, actors, snow) as an Embree 3 scene ready for ray
-// casting. Static triangles (ground, objects, parked cars, snowbanks) form one instanced scene;
+// World: the town plus one pass (parked cars, actors, snow, map aging) as an Embree 3 scene
+// ready for ray casting. Static triangles (ground, objects, parked cars, aging objects,
+// snowbanks) form one instanced scene;
 // each actor is its own small scene, instanced with a two-step motion-blur transform per
 // revolution so that moving objects smear as they do in a real spinning LIDAR. The Town must
 // outlive the World. Embree objects stay behind the pimpl (src/sim/world_impl.h).
@@ -27,7 +28,10 @@ class World {
   World& operator=(const World&) = delete;
 
   const Town& town() const;
+  /// The pass contents; with map aging, without the parked cars the aging objects displaced.
   const PassContents& pass() const;
+  /// What map aging changed (empty for the mapping pass and for aging mode none).
+  const MapAging& aging() const;
   size_t numStaticTriangles() const;
   /// Ground height including the pass's snow cover [m].
   double surfaceHeight(double x, double y) const;

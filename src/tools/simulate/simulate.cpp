@@ -3,6 +3,7 @@
 #include <sys/stat.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <memory>
 
@@ -46,6 +47,41 @@ class OutputSink : public sim::SimulationSink {
  private:
   long count_ = 0;
 };
+
+/// One line per sensor: how its true mount differs from the nominal one (the run log keeps
+/// the drawn calibration error).
+void printExtrinsicErrors(const sim::Simulation& s) {
+  const sim::RigConfig& nominal = s.config().rig;
+  const sim::RigConfig& truth = s.lidar().rig();
+  for (size_t k = 0; k < nominal.sensors.size(); ++k) {
+    const sim::MountError e = sim::mountError(nominal.sensors[k], truth.sensors[k]);
+    const Eigen::Vector3d deg = e.rotation_rad * 180.0 / M_PI;
+    std::printf(
+        "extrinsic error %s: translation %+.4f %+.4f %+.4f m (%.4f m), rotation %+.3f %+.3f "
+        "%+.3f deg (%.3f deg) about base_link x y z\n",
+        nominal.sensors[k].frame_id.c_str(), e.translation_m.x(), e.translation_m.y(),
+        e.translation_m.z(), e.translation_m.norm(), deg.x(), deg.y(), deg.z(), deg.norm());
+  }
+}
+
+void printAging(const sim::World& world) {
+  const sim::MapAging& a = world.aging();
+  size_t with_container = 0;
+  for (const sim::ConstructionSite& site : a.sites) with_container += site.has_container;
+  double repaved_m = 0.0;
+  size_t repainted = 0;
+  for (const sim::RepavedStretch& r : a.repaved) {
+    repaved_m += r.lateral.x() > 0.5 ? r.area.sizes().y() : r.area.sizes().x();  // along
+    repainted += r.repainted;
+  }
+  std::printf(
+      "aging: %zu construction sites (%zu with a container), %zu containers, %zu of %zu trees "
+      "grown, %zu repaved stretches (%.0f m; %zu repainted shifted, %zu without paint); %zu "
+      "parked cars removed\n",
+      a.sites.size(), with_container, a.containers.size(), a.grown_trees.size(),
+      world.town().trees().size(), a.repaved.size(), repaved_m, repainted,
+      a.repaved.size() - repainted, a.removed_parked_cars);
+}
 
 int fail(const std::string& what) {
   std::fprintf(stderr, "simulate: %s\n", what.c_str());
@@ -91,6 +127,8 @@ int main(int argc, char** argv) {
       s.world().pass().actors.size(), s.beginTime(), s.endTime(),
       static_cast<long long>(s.numCycles()), opt.config.rig.sensors.size(),
       s.lidar().model().azimuthStepDeg());
+  if (opt.config.extrinsic_error.mode != sim::ExtrinsicErrorMode::kNone) printExtrinsicErrors(s);
+  if (opt.config.pass.aging.mode != sim::MapAgingMode::kNone) printAging(s.world());
   if (opt.dry_run) return 0;
 
   OutputSink out;

@@ -29,6 +29,16 @@ Pass:
   --parked-keep P          share of parking slots unchanged from the mapping pass (0.6)
   --snowfall P             snowy: probability that a ray returns from a flake (0.015)
   --snow-depth MIN,MAX     snowy: snow cover depth range [m] (0.05,0.15)
+  --aging MODE             none | realistic: the town a few months after the mapping drive
+                           (construction sites, containers in parking slots, grown trees,
+                           repaved stretches; downtown and snowy only) (none)
+  --aging-sites-per-km X   realistic: fenced construction sites per km of road (1)
+  --aging-containers-per-km X  realistic: shipping containers in parking slots per km (1.5)
+  --aging-tree-share P     realistic: share of street trees with a grown crown (0.25)
+  --aging-tree-growth MIN,MAX  realistic: crown growth outward and downward [m] (0.3,0.6)
+  --aging-repaved-per-km X realistic: repaved 30-80 m stretches per km of road, half of them
+                           without paint yet, half repainted 0.3-0.6 m to one side (0.5)
+  --aging-seed N           realistic: seed of the changes (derived from pass and pass seed)
 Segment (the first limit reached ends the segment):
   --start-offset M         start this far along the route [m] (0)
   --distance M             drive at most this far [m] (whole route)
@@ -43,6 +53,12 @@ Sensors:
   --max-range M            (100)
   --mount-height M         sensor height above ground (1.95)
   --tilt DEG               outward tilt of the corner sensors (5)
+  --extrinsic-error MODE   none | realistic: each sensor's true mount is off its nominal one
+                           (rays are cast from the true mounts; merging, deskewing and
+                           /tf_static use the nominal ones) (none)
+  --extrinsic-error-m MIN,MAX    realistic: translation error range per sensor [m] (0.01,0.02)
+  --extrinsic-error-deg MIN,MAX  realistic: rotation error range per sensor [deg] (0.1,0.2)
+  --extrinsic-error-seed N realistic: seed of the errors (derived from pass and pass seed)
 INS and ground truth:
   --ins-scale-error S      odometry distance scale error (0.002)
   --ins-heading-bias DEG   constant heading error (0.086)

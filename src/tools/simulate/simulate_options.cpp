@@ -57,6 +57,7 @@ Result<SimulateOptions> parseSimulateOptions(int argc, char** argv) {
   sim::SimulationConfig& c = o.config;
   int sensors = 4;
   double mount_height = 1.95, tilt = 5.0, azimuth_step = 0.0;
+  ImperfectionFlags imperfection;
 
   using Setter = std::function<Status(double)>;
   std::map<std::string, Setter> num = {
@@ -325,6 +326,9 @@ Result<SimulateOptions> parseSimulateOptions(int argc, char** argv) {
       return R::failure("option " + a + " needs a value (or is unknown; see --help)");
     const std::string v = argv[++k];
     if (a == "--pass") continue;  // handled above
+    auto imperfect = applyImperfectionOption(a, v, &c, &imperfection);
+    if (!imperfect) return R::failure(imperfect.error());
+    if (*imperfect) continue;
     if (a == "--bag") {
       o.bag.path = v;
       continue;
@@ -376,6 +380,8 @@ Result<SimulateOptions> parseSimulateOptions(int argc, char** argv) {
   if (o.map_pose_error.mode != sim::MapPoseErrorMode::kNone && o.kitti_dir.empty() && !o.dry_run)
     return R::failure("option --map-pose-error " +
                       std::string("realistic changes the poses of --kitti DIR: give --kitti"));
+  const Status world_check = checkImperfectionOptions(c, imperfection);
+  if (!world_check) return R::failure(world_check.error());
   c.emit_revolutions = o.bag.per_sensor_clouds;
   c.emit_merged = !o.bag.path.empty() && o.bag.merged_cloud;
   c.emit_deskewed = !o.kitti_dir.empty();

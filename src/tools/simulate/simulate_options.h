@@ -6,6 +6,7 @@
 #include "gmm_localization/sim/map_pose_error.h"
 #include "gmm_localization/sim/simulation.h"
 #include "simulate/simulate_bag_writer.h"
+#include "simulate/simulate_imperfection_options.h"
 
 namespace gmm_localization {
 namespace tools {
