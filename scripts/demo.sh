@@ -9,7 +9,12 @@
 #      (launch/replay.launch, its own ROS master on a free port), recording its output;
 #   5. evaluates: mode A (`evaluate bag`: the same pipeline offline, deterministic) on both
 #      drives and mode B (`evaluate recorded`) on the replay's recording;
-#   6. draws Fig. 8, 9, 10 and Table I (scripts/plot_evaluation.py) and prints Table I.
+#   6. the imperfect world (GMM_DEMO_IMPERFECT=1): the same town mapped from SLAM-like poses by
+#      a vehicle with calibration errors (simulate --map-pose-error realistic --extrinsic-error
+#      realistic), drives a few months later (--aging realistic: construction sites, containers,
+#      grown trees, a repaved road) by a vehicle with its own calibration errors, evaluated
+#      offline against the exact truth and against the truth in the map's frame (--map-poses);
+#   7. draws Fig. 8, 9, 10 and Table I (scripts/plot_evaluation.py) and prints Table I.
 #
 # Everything goes to $GMM_DEMO_DIR (default .ws/demo); existing outputs of a stage are reused
 # when its inputs are unchanged (delete the directory to start over). Knobs (environment):
@@ -18,6 +23,7 @@
 #   GMM_DEMO_REPLAY=1      run the real replay (0: offline evaluation only)
 #   GMM_DEMO_REPLAY_SNOWY=0  also replay the Snowy drive
 #   GMM_DEMO_OFFSETS=100   scans registered from random 10 m offsets per drive (Fig. 8)
+#   GMM_DEMO_IMPERFECT=1   also the imperfect world (0: the perfect-map world only)
 #   GMM_BUILD_LOCK=FILE    build under `flock FILE` (a build directory shared with others)
 # docs/evaluation.md explains the outputs and lists measured results and stage times.
 set -euo pipefail
@@ -30,6 +36,7 @@ SNOWY="${GMM_DEMO_SNOWY:-1}"
 REPLAY="${GMM_DEMO_REPLAY:-1}"
 REPLAY_SNOWY="${GMM_DEMO_REPLAY_SNOWY:-0}"
 OFFSETS="${GMM_DEMO_OFFSETS:-100}"
+IMPERFECT="${GMM_DEMO_IMPERFECT:-1}"
 TOWN=(--town-size 600 --route-length 1200)
 SEGMENT=(--start-offset 200 --duration "$DURATION")
 
@@ -74,43 +81,65 @@ fresh() {  # fresh STAMP CMD... : true when STAMP holds exactly CMD
   [ -f "$1" ] && [ "$(cat "$1")" = "${*:2}" ]
 }
 
-MAPPING_CMD=("$BIN/simulate" "${TOWN[@]}" --pass mapping --kitti "$DEMO/mapping" --kitti-every 2 --quiet)
-begin "simulate the mapping pass (KITTI scans)"
-if fresh "$DEMO/mapping.done" "${MAPPING_CMD[@]}"; then
-  echo "reusing $DEMO/mapping"
-else
-  rm -rf "$DEMO/mapping" "$DEMO/mapping.done"
-  "${MAPPING_CMD[@]}" || fail "simulate mapping"
-  echo "${MAPPING_CMD[*]}" >"$DEMO/mapping.done"
-fi
-end
+# The imperfect world's options (docs/simulator.md): the mapping vehicle's poses come from a
+# SLAM back end and its sensors are calibrated to within 1-2 cm / 0.1-0.2 deg; the town has aged
+# between the mapping pass and the drives, whose vehicle has its own calibration errors.
+IMPERFECT_MAPPING=(--map-pose-error realistic --extrinsic-error realistic)
+IMPERFECT_DRIVE=(--aging realistic --extrinsic-error realistic)
 
-MAP_CMD=("$BIN/build_map" --kitti "$DEMO/mapping" --kitti-fields xyzi --output "$DEMO/map" --overwrite)
-begin "build the map"
-if fresh "$DEMO/map.done" "${MAP_CMD[@]}" && [ "$DEMO/map.done" -nt "$DEMO/mapping.done" ]; then
-  echo "reusing $DEMO/map"
-else
-  rm -f "$DEMO/map.done"
-  "${MAP_CMD[@]}" >"$DEMO/build_map.log" 2>&1 || { tail -n 20 "$DEMO/build_map.log"; fail "build_map"; }
-  grep -A12 "build_map summary" "$DEMO/build_map.log" || true
-  echo "${MAP_CMD[*]}" >"$DEMO/map.done"
-fi
-end
-
-DATASETS=(downtown)
-[ "$SNOWY" = 1 ] && DATASETS+=(snowy)
-for ds in "${DATASETS[@]}"; do
-  SIM_CMD=("$BIN/simulate" "${TOWN[@]}" --pass "$ds" "${SEGMENT[@]}" --bag "$DEMO/$ds.bag" --quiet)
-  begin "simulate the $ds drive (${DURATION} s, rosbag)"
-  if fresh "$DEMO/$ds.done" "${SIM_CMD[@]}"; then
-    echo "reusing $DEMO/$ds.bag"
+map_world() {  # map_world SUFFIX MAPPING_OPTIONS... : the mapping pass and its map
+  local sfx="$1"
+  shift
+  local mapping_cmd=("$BIN/simulate" "${TOWN[@]}" --pass mapping --kitti "$DEMO/mapping$sfx"
+    --kitti-every 2 --quiet "$@")
+  begin "simulate the mapping pass$sfx (KITTI scans)"
+  if fresh "$DEMO/mapping$sfx.done" "${mapping_cmd[@]}"; then
+    echo "reusing $DEMO/mapping$sfx"
   else
-    rm -f "$DEMO/$ds.bag" "$DEMO/$ds.done"
-    "${SIM_CMD[@]}" || fail "simulate $ds"
-    echo "${SIM_CMD[*]}" >"$DEMO/$ds.done"
+    rm -rf "$DEMO/mapping$sfx" "$DEMO/mapping$sfx.done"
+    "${mapping_cmd[@]}" || fail "simulate mapping$sfx"
+    echo "${mapping_cmd[*]}" >"$DEMO/mapping$sfx.done"
   fi
   end
-done
+  local map_cmd=("$BIN/build_map" --kitti "$DEMO/mapping$sfx" --kitti-fields xyzi
+    --output "$DEMO/map$sfx" --overwrite)
+  begin "build the map$sfx"
+  if fresh "$DEMO/map$sfx.done" "${map_cmd[@]}" && [ "$DEMO/map$sfx.done" -nt "$DEMO/mapping$sfx.done" ]; then
+    echo "reusing $DEMO/map$sfx"
+  else
+    rm -f "$DEMO/map$sfx.done"
+    "${map_cmd[@]}" >"$DEMO/build_map$sfx.log" 2>&1 ||
+      { tail -n 20 "$DEMO/build_map$sfx.log"; fail "build_map$sfx"; }
+    grep -A12 "build_map summary" "$DEMO/build_map$sfx.log" || true
+    echo "${map_cmd[*]}" >"$DEMO/map$sfx.done"
+  fi
+  end
+}
+
+drive() {  # drive DATASET SUFFIX DRIVE_OPTIONS... : a localization drive as a rosbag
+  local ds="$1" sfx="$2"
+  shift 2
+  local sim_cmd=("$BIN/simulate" "${TOWN[@]}" --pass "$ds" "${SEGMENT[@]}"
+    --bag "$DEMO/$ds$sfx.bag" --quiet "$@")
+  begin "simulate the $ds$sfx drive (${DURATION} s, rosbag)"
+  if fresh "$DEMO/$ds$sfx.done" "${sim_cmd[@]}"; then
+    echo "reusing $DEMO/$ds$sfx.bag"
+  else
+    rm -f "$DEMO/$ds$sfx.bag" "$DEMO/$ds$sfx.done"
+    "${sim_cmd[@]}" || fail "simulate $ds$sfx"
+    echo "${sim_cmd[*]}" >"$DEMO/$ds$sfx.done"
+  fi
+  end
+}
+
+map_world ""
+DATASETS=(downtown)
+[ "$SNOWY" = 1 ] && DATASETS+=(snowy)
+for ds in "${DATASETS[@]}"; do drive "$ds" ""; done
+if [ "$IMPERFECT" = 1 ]; then
+  map_world _imperfect "${IMPERFECT_MAPPING[@]}"
+  for ds in "${DATASETS[@]}"; do drive "$ds" _imperfect "${IMPERFECT_DRIVE[@]}"; done
+fi
 
 # The replay's initial pose: the bag's first ground truth moved like a GPS fix would be.
 initial_pose_args() {
@@ -149,19 +178,28 @@ for ds in "${REPLAYS[@]}"; do
 done
 
 EVAL_DIRS=()
-for ds in "${DATASETS[@]}"; do
-  begin "evaluate $ds offline (evaluate bag)"
-  "$BIN/evaluate" bag --bag "$DEMO/$ds.bag" --map "$DEMO/map" --dataset "$ds" \
-    --offset-scans "$OFFSETS" --out "$DEMO/eval_$ds" >"$DEMO/eval_$ds.log" 2>&1 ||
-    { tail -n 20 "$DEMO/eval_$ds.log"; fail "evaluate bag $ds"; }
-  grep -E "^\| this run|^Fig. 8|^Matching" "$DEMO/eval_$ds.log" || true
-  EVAL_DIRS+=("$DEMO/eval_$ds")
+evaluate_offline() {  # evaluate_offline DATASET SUFFIX WORLD EVALUATE_OPTIONS...
+  local ds="$1" sfx="$2" world="$3"
+  shift 3
+  begin "evaluate $ds offline, $world world (evaluate bag)"
+  "$BIN/evaluate" bag --bag "$DEMO/$ds$sfx.bag" --map "$DEMO/map$sfx" --dataset "$ds" \
+    --world "$world" --offset-scans "$OFFSETS" --out "$DEMO/eval_$ds$sfx" "$@" \
+    >"$DEMO/eval_$ds$sfx.log" 2>&1 ||
+    { tail -n 20 "$DEMO/eval_$ds$sfx.log"; fail "evaluate bag $ds$sfx"; }
+  grep -E "^\| this run|^\| the map|^Fig. 8|^Matching" "$DEMO/eval_$ds$sfx.log" || true
+  EVAL_DIRS+=("$DEMO/eval_$ds$sfx")
   end
-done
+}
+for ds in "${DATASETS[@]}"; do evaluate_offline "$ds" "" perfect; done
+if [ "$IMPERFECT" = 1 ]; then
+  for ds in "${DATASETS[@]}"; do
+    evaluate_offline "$ds" _imperfect imperfect --map-poses "$DEMO/mapping_imperfect"
+  done
+fi
 for ds in "${REPLAYS[@]}"; do
   begin "evaluate the $ds replay (evaluate recorded)"
   "$BIN/evaluate" recorded --bag "$DEMO/replay_$ds.bag" --source-bag "$DEMO/$ds.bag" \
-    --dataset "$ds" --out "$DEMO/eval_replay_$ds" >"$DEMO/eval_replay_$ds.log" 2>&1 ||
+    --dataset "$ds" --world perfect --out "$DEMO/eval_replay_$ds" >"$DEMO/eval_replay_$ds.log" 2>&1 ||
     { tail -n 20 "$DEMO/eval_replay_$ds.log"; fail "evaluate recorded $ds"; }
   grep -E "^\| this run|^Matching" "$DEMO/eval_replay_$ds.log" || true
   EVAL_DIRS+=("$DEMO/eval_replay_$ds")
