@@ -158,6 +158,26 @@ LocalizationPolicyOptions loadLocalizationPolicyOptions(const ParamSource& nh) {
   return o;
 }
 
+MatchMethodOptions loadMatchMethodOptions(const ParamSource& pnh) {
+  MatchMethodOptions o;
+  const std::string method = param<std::string>(pnh, "method", mapLayerName(o.layer));
+  if (method == "reflectivity") {
+    o.layer = MapLayer::kReflectivity;
+  } else if (method != "height") {
+    throw ConfigError("parameter " + pnh.resolveName("method") + " = '" + method +
+                      "' must be height (the paper's) or reflectivity (the baseline; the map "
+                      "server must serve the map's reflectivity layer)");
+  }
+  ReflectivityLayerOptions& r = o.reflectivity;
+  r.metres_per_unit = param(pnh, "reflectivity/metres_per_unit", r.metres_per_unit, 1e-4, 1.0);
+  r.ground_height_m = param(pnh, "reflectivity/ground_height_m", r.ground_height_m, -10.0, 10.0);
+  r.ground_min_m = param(pnh, "reflectivity/ground_min_m", r.ground_min_m, -2.0, 2.0);
+  r.ground_max_m = param(pnh, "reflectivity/ground_max_m", r.ground_max_m, -2.0, 2.0);
+  r.max_range_m = param(pnh, "reflectivity/max_range_m", r.max_range_m, 1.0, 200.0);
+  requireValid("matcher method options", o.validate());
+  return o;
+}
+
 MatcherOptions loadMatcherOptions(const ParamSource& pnh) {
   MatcherOptions o;
   o.map_frame = param<std::string>(pnh, "map_frame", o.map_frame);
@@ -167,6 +187,7 @@ MatcherOptions loadMatcherOptions(const ParamSource& pnh) {
   }
   o.registration = loadRegistrationOptions(pnh);
   o.policy = loadLocalizationPolicyOptions(pnh);
+  o.method = loadMatchMethodOptions(pnh);
   MatchSessionOptions& s = o.session;
   s.deskew = param(pnh, "deskew", s.deskew);
   s.deskew_twist_max_gap_s =
@@ -219,6 +240,7 @@ LocalizerPipelineOptions pipelineOptions(const MatcherOptions& m, const EkfNodeO
   o.filter = e.filter;
   o.registration = m.registration;
   o.policy = m.policy;
+  o.method = m.method;
   o.session = m.session;
   return o;
 }

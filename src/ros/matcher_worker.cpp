@@ -136,6 +136,7 @@ bool Matcher::scanToBase(const sensor_msgs::PointCloud2& msg, ScanInput* scan,
   scan->stamp_s = msg.header.stamp.toSec();
   scan->points = std::move(cloud->points);
   scan->time_s = std::move(cloud->time_s);
+  scan->intensity = std::move(cloud->intensity);
   scan->time_source = describePointTimes(*cloud);
   scan->time_problem = std::move(cloud->time_problem);
   if (!scan->time_problem.empty() && options_.session.deskew) {

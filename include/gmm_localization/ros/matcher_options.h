@@ -24,6 +24,7 @@ struct MatcherOptions {
   std::string base_frame = "base_link";
   RegistrationOptions registration;
   LocalizationPolicyOptions policy;
+  MatchMethodOptions method;  ///< `method` and `reflectivity/*`: the map layer matched
 
   /// deskew, deskew_twist_max_gap_s, odometry_buffer_s, odometry_max_extrapolation_s,
   /// time_backwards_tolerance_s, scan_queue_size and initial_pose/on_reset (the keys of the

@@ -33,7 +33,7 @@ Result<LocalizerPipeline> LocalizerPipeline::create(const LocalizerPipelineOptio
   if (!e.empty()) return R::failure("pipeline: " + e);
   auto filter = LocalizationFilter::create(options.ekf, options.filter);
   if (!filter) return R::failure(filter.error());
-  auto processor = MatchProcessor::create(options.registration, options.policy);
+  auto processor = MatchProcessor::create(options.registration, options.policy, options.method);
   if (!processor) return R::failure(processor.error());
   return LocalizerPipeline(options, std::move(filter).value(), std::move(processor).value());
 }

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <string>
 
+#include "gmm_localization/core/matching/reflectivity_scan.h"
 #include "gmm_localization/core/raster/window_coverage.h"
 
 namespace gmm_localization {
@@ -23,15 +24,32 @@ const char* matchOutcomeName(MatchOutcome outcome) {
   }
 }
 
+std::string MatchMethodOptions::validate() const {
+  const ReflectivityLayerOptions& r = reflectivity;
+  if (!(r.metres_per_unit > 0.0 && r.metres_per_unit <= 1.0))
+    return "reflectivity/metres_per_unit must be in (0, 1]";
+  if (!(std::isfinite(r.ground_height_m) && std::abs(r.ground_height_m) <= 10.0))
+    return "reflectivity/ground_height_m must be within +-10 m";
+  if (!(r.ground_min_m < r.ground_max_m && r.ground_min_m >= -2.0 && r.ground_max_m <= 2.0))
+    return "reflectivity/ground_min_m < ground_max_m, both within +-2 m";
+  if (!(r.max_range_m > 0.0 && r.max_range_m <= 200.0))
+    return "reflectivity/max_range_m must be in (0, 200]";
+  return {};
+}
+
 Result<MatchProcessor> MatchProcessor::create(const RegistrationOptions& registration,
-                                              const LocalizationPolicyOptions& policy) {
+                                              const LocalizationPolicyOptions& policy,
+                                              const MatchMethodOptions& method) {
   std::string e = registration.validate();
   if (!e.empty()) return Result<MatchProcessor>::failure("registration: " + e);
   e = policy.validate();
   if (!e.empty()) return Result<MatchProcessor>::failure("policy: " + e);
+  e = method.validate();
+  if (!e.empty()) return Result<MatchProcessor>::failure("method: " + e);
   RegistrationOptions unknown_z = registration;
   unknown_z.z_search_m = std::max(registration.z_search_m, policy.window.unknown_z_search_m);
-  return MatchProcessor(registration, unknown_z, policy);
+  return MatchProcessor(registration, unknown_z, reflectivityRegistrationOptions(registration),
+                        policy, method);
 }
 
 MatchReport MatchProcessor::process(const ChunkMap& map, ScanInput scan, const Prior& prior,
@@ -95,9 +113,23 @@ MatchReport MatchProcessor::process(const ChunkMap& map, ScanInput scan, const P
   request.half_heading_rad = r.window.half_heading_rad;
   request.has_reference = scan.has_reference;
   request.reference = scan.reference;
-  const Registration& registration = prior.z_known ? tracking_ : unknown_z_;
+  // The reflectivity layer: levelled ground returns with their intensity as z (x, y, heading).
+  const bool reflectivity = method_.layer == MapLayer::kReflectivity;
+  PointList reflectivity_points;
+  if (reflectivity) {
+    if (scan.intensity.size() != scan.points.size()) {
+      return finish(MatchOutcome::kSkipped,
+                    "the cloud has no intensity field: the reflectivity method needs one");
+    }
+    reflectivity_points = reflectivityPoints(scan.points, scan.intensity, prior.pose.roll,
+                                             prior.pose.pitch, method_.reflectivity);
+    for (Pose6* p : {&request.prior, &request.reference}) p->z = p->roll = p->pitch = 0.0;
+  }
+  const Registration& registration =
+      reflectivity ? reflectivity_ : (prior.z_known ? tracking_ : unknown_z_);
   std::vector<TraversalNode>* traversal = want_traversal ? &r.traversal : nullptr;
-  auto match = registration.match(map, scan.points, request, traversal, now, &r.timing);
+  auto match = registration.match(map, reflectivity ? reflectivity_points : scan.points, request,
+                                  traversal, now, &r.timing);
   // A global window larger than the map the server holds is searched over the loaded part
   // only: a rejection says how much of it that was.
   auto globalCoverage = [&]() -> std::string {
@@ -117,6 +149,11 @@ MatchReport MatchProcessor::process(const ChunkMap& map, ScanInput scan, const P
   }
   r.has_result = true;
   r.result = std::move(match).value();
+  if (reflectivity) {  // the layer says nothing of height and tilt: the prior's stand
+    r.result.pose.z = prior.pose.z;
+    r.result.pose.roll = prior.pose.roll;
+    r.result.pose.pitch = prior.pose.pitch;
+  }
   const MatchResult& m = r.result;
   r.search_points = m.filtered.points.size();
   r.dropped_nonfinite = m.filtered.dropped_nonfinite;

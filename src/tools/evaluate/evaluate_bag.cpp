@@ -60,6 +60,7 @@ Result<LabelledScan> scanFromCloud(const sensor_msgs::PointCloud2& msg,
   s.scan.stamp_s = msg.header.stamp.toSec();
   s.scan.points = std::move(cloud->points);
   s.scan.time_s = std::move(cloud->time_s);
+  s.scan.intensity = std::move(cloud->intensity);
   // As the matcher: the status says how the times were read, or why they were refused.
   s.scan.time_source = node::describePointTimes(*cloud);
   s.scan.time_problem = std::move(cloud->time_problem);

@@ -307,7 +307,7 @@ Result<EvaluationResults> runBagEvaluation(const BagEvaluationConfig& c, std::os
   out.info.virtual_latency_s = c.latency_s;
   out.info.scan_arrival_delay_s = po.scan_arrival_delay_s;
 
-  auto processor = MatchProcessor::create(po.registration, po.policy);
+  auto processor = MatchProcessor::create(po.registration, po.policy, po.method);
   if (!processor) return R::failure(processor.error());
   std::unique_ptr<OffsetExperiment> offsets;
   if (c.offset_scans > 0) {

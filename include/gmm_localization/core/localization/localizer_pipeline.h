@@ -46,6 +46,7 @@ struct LocalizerPipelineOptions {
   FilterPolicyOptions filter;
   RegistrationOptions registration;
   LocalizationPolicyOptions policy;
+  MatchMethodOptions method;          ///< the map layer matched (height or reflectivity)
   MatchSessionOptions session;        ///< the matcher nodelet's session (and scan queue)
   double scan_arrival_delay_s = 0.0;  ///< scan available at stamp + this [s]
   /// >= 0: a global search (a lost prior, run by the global worker) takes this long instead of

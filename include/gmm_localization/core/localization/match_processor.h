@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "gmm_localization/core/localization/prior_tracker.h"
+#include "gmm_localization/core/map/reflectivity_layer.h"
 #include "gmm_localization/core/matching/registration.h"
 
 namespace gmm_localization {
@@ -24,6 +25,9 @@ struct ScanInput {
   PointList points;      ///< base_link [m]; non-finite points allowed (dropped and counted)
   /// Per-point capture time relative to stamp_s [s] (empty: no deskewing), same size as points.
   std::vector<float> time_s;
+  /// Per-point intensity (empty: the cloud has none), same size as points; the reflectivity
+  /// method needs it.
+  std::vector<float> intensity;
   /// How time_s was read, for the status (e.g. "'t' uint32 relative nanoseconds"); empty: none.
   std::string time_source;
   /// Why time_s is empty although the cloud has a time field (its times make no sense).
@@ -82,11 +86,20 @@ struct MatchReport {
   std::vector<TraversalNode> traversal;
 };
 
+/// The map layer the scans are matched against: the paper's height (the default) or the
+/// reflectivity baseline (core/map/reflectivity_layer.h; the map must hold that layer).
+struct MatchMethodOptions {
+  MapLayer layer = MapLayer::kHeight;
+  ReflectivityLayerOptions reflectivity;
+  std::string validate() const;
+};
+
 class MatchProcessor {
  public:
-  /// Validates both option sets; the reason names the offending key.
+  /// Validates the option sets; the reason names the offending key.
   static Result<MatchProcessor> create(const RegistrationOptions& registration,
-                                       const LocalizationPolicyOptions& policy);
+                                       const LocalizationPolicyOptions& policy,
+                                       const MatchMethodOptions& method = {});
 
   /// Processes one scan (moved in, deskewed in place, returned in the report's `points`). `twist`:
   /// the body twist for deskewing (null: no deskewing). `want_traversal`: record the search
@@ -98,17 +111,23 @@ class MatchProcessor {
 
   const RegistrationOptions& registrationOptions() const { return tracking_.options(); }
   const LocalizationPolicyOptions& policyOptions() const { return policy_; }
+  const MatchMethodOptions& methodOptions() const { return method_; }
 
  private:
   MatchProcessor(const RegistrationOptions& tracking, const RegistrationOptions& unknown_z,
-                 const LocalizationPolicyOptions& policy)
+                 const RegistrationOptions& reflectivity, const LocalizationPolicyOptions& policy,
+                 const MatchMethodOptions& method)
       : tracking_(tracking),
         unknown_z_(unknown_z, tracking_.pool(), tracking_.globalPool()),
-        policy_(policy) {}
+        reflectivity_(reflectivity, tracking_.pool(), tracking_.globalPool()),
+        policy_(policy),
+        method_(method) {}
 
-  Registration tracking_;   ///< prior height known
-  Registration unknown_z_;  ///< wider height pre-alignment (planar initial pose)
+  Registration tracking_;      ///< prior height known
+  Registration unknown_z_;     ///< wider height pre-alignment (planar initial pose)
+  Registration reflectivity_;  ///< the reflectivity layer (x, y, heading)
   LocalizationPolicyOptions policy_;
+  MatchMethodOptions method_;
 };
 
 }  // namespace gmm_localization
