@@ -268,32 +268,38 @@ def table1(runs, path):
              ("ekf_in_map_frame", "EKF against the truth in the map's frame"),
              ("raw_matches_in_map_frame", "raw matches against the truth in the map's frame"),
              ("map_error", "the map's own error (its poses against their truth)"))
-    for world in worlds:
-        for mode, mode_name in (("bag", "offline (evaluate bag)"), ("recorded", "replay (rosbag play)")):
-            by_ds = {r["summary"]["dataset"]: r["summary"] for r in runs
-                     if r["summary"]["mode"] == mode and r["summary"].get("world", "") == world}
-            if not by_ds:
-                continue
-            name = "%s, %s world" % (mode_name, world) if world else mode_name
-            for kind, kind_name in kinds:
-                if not any(s.get(kind) for s in by_ds.values()):
-                    continue  # the map-frame rows only with evaluate --map-poses
-                cells = []
-                for ds in datasets:
-                    s = by_ds.get(ds)
-                    for axis in ("rms_longitudinal_m", "rms_lateral_m"):
-                        cell = cm(s[kind][axis]) if s and s.get(kind) else "-"
-                        loc = s.get("ekf_localized") if s and kind == "ekf" else None
-                        if (loc and loc["count"] and s[kind][axis] is not None
-                                and abs(loc[axis] - s[kind][axis]) > 0.0005):
-                            cell += " (%s+)" % cm(loc[axis])  # without not-yet-localized samples
-                        cells.append(cell)
-                rates = ", ".join("%s %.1f Hz (%.0f%% of scans)" % (ds, s["match_rate_hz"],
-                                                                   100 * s["accepted_share"])
-                                  for ds, s in by_ds.items())
-                label = "This work" if kind != "map_error" else "Map"
-                lines.append("| %s, %s, %s | %s | %s |\n" % (
-                    label, name, kind_name, " | ".join(cells), rates if kind == "ekf" else "-"))
+    groups = [(w, m, mode) for w in worlds for m in ("height", "reflectivity")
+              for mode in ("bag", "recorded")]
+    mode_names = {"bag": "offline (evaluate bag)", "recorded": "replay (rosbag play)"}
+    for world, method, mode in groups:
+        mode_name = mode_names[mode]
+        by_ds = {r["summary"]["dataset"]: r["summary"] for r in runs
+                 if r["summary"]["mode"] == mode and r["summary"].get("world", "") == world
+                 and r["summary"].get("method", "height") == method}
+        if not by_ds:
+            continue
+        name = "%s, %s world" % (mode_name, world) if world else mode_name
+        for kind, kind_name in kinds:
+            if not any(s.get(kind) for s in by_ds.values()):
+                continue  # the map-frame rows only with evaluate --map-poses
+            cells = []
+            for ds in datasets:
+                s = by_ds.get(ds)
+                for axis in ("rms_longitudinal_m", "rms_lateral_m"):
+                    cell = cm(s[kind][axis]) if s and s.get(kind) else "-"
+                    loc = s.get("ekf_localized") if s and kind == "ekf" else None
+                    if (loc and loc["count"] and s[kind][axis] is not None
+                            and abs(loc[axis] - s[kind][axis]) > 0.0005):
+                        cell += " (%s+)" % cm(loc[axis])  # without not-yet-localized samples
+                    cells.append(cell)
+            rates = ", ".join("%s %.1f Hz (%.0f%% of scans)" % (ds, s["match_rate_hz"],
+                                                               100 * s["accepted_share"])
+                              for ds, s in by_ds.items())
+            label = "This work" if kind != "map_error" else "Map"
+            if method != "height" and kind != "map_error":
+                label = "This work, %s method" % method
+            lines.append("| %s, %s, %s | %s | %s |\n" % (
+                label, name, kind_name, " | ".join(cells), rates if kind == "ekf" else "-"))
     lines.append("| Target | 7.5 cm | 5.0 cm | 9.0 cm | 6.0 cm | 10 Hz |\n")
     lines.append("\n*: with GPS (paper). +: over the EKF samples whose reported sigma is at most "
                  "1 m (the filter's start-up transient left out). RMS over the evaluated drives; "

@@ -71,6 +71,7 @@ int main(int argc, char** argv) {
       return 1;
     }
     results->info.world = cmd.world;
+    results->info.method = cmd.method;
     if (map_frame) {
       results->info.map_poses = cmd.map_poses;
       applyMapFrame(*map_frame, *results);

@@ -64,6 +64,10 @@ Mode B, score a recording of a real replay (roslaunch gmm_localization replay.la
     [--status-topic /localization/status] [--ekf-rate HZ (0: all)]
 
 Both modes:
+    --method M              height (the paper's) | reflectivity (the Levinson baseline: mode A
+                            matches against MAP_DIR/reflectivity, built by build_map --layer
+                            reflectivity, with the matcher's method: reflectivity; mode B: the
+                            label of the replay's method) [height]
     --world LABEL           a label of the simulated world (e.g. perfect, imperfect), kept in
                             summary.json and used by plot_evaluation.py to group Table I
     --map-poses DIR         a map built from inexact poses: DIR holds the poses it was built
@@ -111,6 +115,11 @@ EvaluateCommand parseEvaluateCommand(int argc, char** argv, const std::string& d
       b.bag = r.bag = v;
     } else if (key == "--out") {
       c.out = v;
+    } else if (key == "--method") {
+      if (v != "height" && v != "reflectivity") {
+        throw std::invalid_argument("--method: '" + v + "' is not height or reflectivity");
+      }
+      c.method = v;
     } else if (key == "--world") {
       c.world = v;
     } else if (key == "--map-poses") {
@@ -175,6 +184,10 @@ EvaluateCommand parseEvaluateCommand(int argc, char** argv, const std::string& d
   if (c.out.empty()) throw std::invalid_argument("--out is required");
   if (c.mode == EvaluateCommand::Mode::kBag && b.map.empty()) {
     throw std::invalid_argument("--map is required in mode bag");
+  }
+  if (c.mode == EvaluateCommand::Mode::kBag && c.method == "reflectivity") {
+    b.map += "/reflectivity";
+    b.matcher_overrides.insert(b.matcher_overrides.begin(), "method=reflectivity");
   }
   b.matcher_yaml = config_dir + "/matcher.yaml";
   b.ekf_yaml = config_dir + "/ekf.yaml";

@@ -185,6 +185,7 @@ std::string summaryJson(const EvaluationResults& r, const Summary& s) {
     << ",\n  \"ekf_localized\": " << errorJson(s.ekf_localized)
     << ",\n  \"ekf_unlocalized_samples\": " << s.ekf_unlocalized
     << ",\n  \"raw_matches\": " << errorJson(s.raw) << ",\n  \"world\": " << jsonString(i.world)
+    << ",\n  \"method\": " << jsonString(i.method)
     << ",\n  \"map_poses\": " << jsonString(i.map_poses);
   if (i.map_poses.empty()) {
     o << ",\n  \"ekf_in_map_frame\": null,\n  \"raw_matches_in_map_frame\": null"
@@ -236,7 +237,8 @@ std::string summaryMarkdown(const EvaluationResults& r, const Summary& s) {
   const auto paper = paperRms(i.dataset);
   const auto target = targetRms(i.dataset);
   std::ostringstream o;
-  o << "## Evaluation: " << i.dataset << (i.world.empty() ? "" : ", " + i.world + " world") << " ("
+  o << "## Evaluation: " << i.dataset << (i.world.empty() ? "" : ", " + i.world + " world")
+    << (i.method == "height" ? "" : ", " + i.method + " method") << " ("
     << (i.mode == "bag" ? "bag read directly" : "recorded replay") << ")\n\n"
     << "bag `" << i.bag << "`" << (i.map.empty() ? "" : ", map `" + i.map + "`") << "; "
     << fixed(i.duration_s, 1) << " s of driving, evaluated in " << fixed(i.wall_s, 1) << " s wall";
