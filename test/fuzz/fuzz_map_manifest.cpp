@@ -4,8 +4,9 @@
 // mutations reach the checks behind the CRC). An accepted manifest must honour the contract
 // (geometry within the physical bounds, safe unique tile names, tiles within the extent,
 // counts that sum to the tile's cells) and re-encode to the same bytes (the format has one
-// encoding per manifest; the georeference flag byte is normalised to 0/1, and a version 1
-// manifest is re-encoded as version 2).
+// encoding per manifest; the georeference flag byte is normalised to 0/1, and a version 1 or 2
+// manifest is re-encoded as version 3, a height map). A reflectivity map's definition is within
+// checkReflectivityLayer's bounds.
 #include <cstdint>
 #include <set>
 #include <vector>
@@ -21,6 +22,10 @@ constexpr size_t kGeoreferenceFlagOffset = 36;
 
 void checkManifest(const MapManifest& m, const uint8_t* data, size_t size) {
   FUZZ_CHECK(checkMapGeometryBounds(m.geometry).empty(), "geometry out of bounds");
+  FUZZ_CHECK(m.layer == MapLayer::kHeight || m.layer == MapLayer::kReflectivity, "unknown layer");
+  FUZZ_CHECK(m.format_version >= 3 || m.layer == MapLayer::kHeight, "an old manifest not height");
+  FUZZ_CHECK(m.layer != MapLayer::kReflectivity || checkReflectivityLayer(m.reflectivity).empty(),
+             "reflectivity layer out of bounds");
   std::set<TileId> ids;
   const uint64_t cells = uint64_t(m.geometry.tile_size_cells) * m.geometry.tile_size_cells;
   for (const TileInfo& t : m.tiles) {
@@ -37,6 +42,7 @@ void checkManifest(const MapManifest& m, const uint8_t* data, size_t size) {
   auto back = decodeManifest(again.data(), again.size(), "re-encoded");
   FUZZ_CHECK(back.ok(), "re-encoded manifest does not decode: %s", back.error().c_str());
   FUZZ_CHECK(back->tiles.size() == m.tiles.size(), "tile count changed");
+  FUZZ_CHECK(back->layer == m.layer, "layer changed");
   const bool newest = size > 6 && data[4] == kManifestFormatVersion && data[5] == 0;
   if (newest && size > kGeoreferenceFlagOffset && data[kGeoreferenceFlagOffset] <= 1) {
     FUZZ_CHECK(again.size() == size && std::equal(again.begin(), again.end(), data),

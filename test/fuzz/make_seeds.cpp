@@ -137,6 +137,9 @@ void mapSeeds(std::vector<TileInfo>& infos) {
   m.provenance = "fuzz_make_seeds";
   m.tiles = infos;
   seed("map_manifest", "manifest_3_tiles_georeferenced", encodeManifest(m));
+  m.layer = MapLayer::kReflectivity;  // the layer and its definition after the provenance
+  m.reflectivity.ground_height_m = -1.73;
+  seed("map_manifest", "manifest_3_tiles_reflectivity", encodeManifest(m));
   MapManifest empty;
   empty.geometry.tile_size_cells = 8;
   seed("map_manifest", "manifest_no_tiles", encodeManifest(empty));

@@ -90,6 +90,15 @@ std::vector<uint8_t> encodeManifest(const MapManifest& m) {
   w.f64(m.georeference.origin_northing_m);
   w.f64(m.georeference.origin_up_m);
   w.str(m.provenance);
+  w.u8(static_cast<uint8_t>(m.layer));
+  if (m.layer == MapLayer::kReflectivity) {
+    const ReflectivityLayerOptions& r = m.reflectivity;
+    w.f64(r.metres_per_unit);
+    w.f64(r.ground_height_m);
+    w.f64(r.ground_min_m);
+    w.f64(r.ground_max_m);
+    w.f64(r.max_range_m);
+  }
   w.u32(static_cast<uint32_t>(m.tiles.size()));
   for (const TileInfo& t : m.tiles) {
     w.i32(t.id.x);
@@ -152,9 +161,29 @@ Result<MapManifest> decodeManifest(const uint8_t* data, size_t size, const std::
   m.georeference.origin_northing_m = body.f64("origin northing");
   m.georeference.origin_up_m = body.f64("origin up");
   m.provenance = body.str("provenance", kMaxTextLength);
+  uint8_t layer = 0;  // before version 3: height maps
+  if (version >= 3) {
+    layer = body.u8("layer");
+    if (layer == static_cast<uint8_t>(MapLayer::kReflectivity)) {
+      ReflectivityLayerOptions& r = m.reflectivity;
+      r.metres_per_unit = body.f64("metres per unit");
+      r.ground_height_m = body.f64("ground height");
+      r.ground_min_m = body.f64("ground band min");
+      r.ground_max_m = body.f64("ground band max");
+      r.max_range_m = body.f64("ground range");
+    }
+  }
   const uint32_t n_tiles = body.u32("tile count");
   if (!body.ok()) return fail(body.error());
   if (flags != 0) return fail("unknown flags " + std::to_string(flags));
+  if (layer > static_cast<uint8_t>(MapLayer::kReflectivity)) {
+    return fail("unknown layer " + std::to_string(layer) + " (0 height, 1 reflectivity)");
+  }
+  m.layer = static_cast<MapLayer>(layer);
+  if (m.layer == MapLayer::kReflectivity) {
+    const std::string layer_error = checkReflectivityLayer(m.reflectivity);
+    if (!layer_error.empty()) return fail("invalid reflectivity layer: " + layer_error);
+  }
   if (zone > 60 || north > 1) {
     return fail("invalid georeference: UTM zone " + std::to_string(zone) + ", hemisphere " +
                 std::to_string(north) + " (zone 0..60, hemisphere 0 south / 1 north)");

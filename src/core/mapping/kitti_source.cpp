@@ -109,7 +109,8 @@ Result<Eigen::Isometry3d> readKittiCalibTr(const std::string& path) {
   return R::failure("calibration file '" + path + "': no 'Tr:' line with 12 numbers");
 }
 
-Result<std::vector<Eigen::Vector3f>> readKittiScan(const std::string& path, KittiFields fields) {
+Result<std::vector<Eigen::Vector3f>> readKittiScan(const std::string& path, KittiFields fields,
+                                                   std::vector<float>* intensity) {
   using R = Result<std::vector<Eigen::Vector3f>>;
   auto bytes = readFileBytes(path, uint64_t{1} << 31);
   if (!bytes) return R::failure("scan " + bytes.error());
@@ -134,16 +135,19 @@ Result<std::vector<Eigen::Vector3f>> readKittiScan(const std::string& path, Kitt
                       (stride == 16 ? "xyzi" : "xyz") + " records)");
   }
   std::vector<Eigen::Vector3f> points(n / stride);
+  const bool with_intensity = intensity != nullptr && stride == 16;
+  if (intensity) intensity->assign(with_intensity ? points.size() : 0, 0.f);
+  auto floatAt = [](const uint8_t* b) {
+    const uint32_t bits =
+        uint32_t(b[0]) | uint32_t(b[1]) << 8 | uint32_t(b[2]) << 16 | uint32_t(b[3]) << 24;
+    float f;
+    std::memcpy(&f, &bits, sizeof f);
+    return f;
+  };
   const uint8_t* p = bytes->data();
   for (size_t i = 0; i < points.size(); ++i, p += stride) {
-    for (int k = 0; k < 3; ++k) {
-      const uint8_t* b = p + 4 * k;
-      const uint32_t bits =
-          uint32_t(b[0]) | uint32_t(b[1]) << 8 | uint32_t(b[2]) << 16 | uint32_t(b[3]) << 24;
-      float f;
-      std::memcpy(&f, &bits, sizeof f);
-      points[i][k] = f;
-    }
+    for (int k = 0; k < 3; ++k) points[i][k] = floatAt(p + 4 * k);
+    if (with_intensity) (*intensity)[i] = floatAt(p + 12);
   }
   return points;
 }
@@ -244,9 +248,11 @@ Result<bool> KittiScanSource::next(PointBatch& batch) {
       scan.path.compare(scan.path.size() - keyframe.size(), keyframe.size(), keyframe) == 0;
   const KittiFields fields =
       options_.fields == KittiFields::kAuto && is_keyframe ? KittiFields::kXyz : options_.fields;
-  auto points = readKittiScan(scan.path, fields);
+  auto points = readKittiScan(scan.path, fields, &batch.intensity);
   if (!points) return Result<bool>::failure(points.error());
   setBatchFromSensorFrame(*points, scan.map_T_sensor, batch);
+  batch.has_vehicle_origin = true;  // the scans' frame (see the class comment)
+  batch.vehicle_origin_m = scan.map_T_sensor.translation();
   return true;
 }
 

@@ -93,6 +93,31 @@ std::string MapBuilderOptions::validate() const {
   if (codec.deflate_level < 1 || codec.deflate_level > 9) {
     return fieldError("codec.deflate_level", codec.deflate_level, "[1, 9]");
   }
+  if (layer != MapLayer::kHeight && layer != MapLayer::kReflectivity) {
+    return fieldError("layer", static_cast<int>(layer), "{0 height, 1 reflectivity}");
+  }
+  if (layer == MapLayer::kReflectivity) {
+    const std::string r = checkReflectivityLayer(reflectivity);
+    if (!r.empty()) return "reflectivity." + r;
+  }
+  return {};
+}
+
+std::string MapBuilderOptions::batchError(const PointBatch& batch) const {
+  if (layer != MapLayer::kReflectivity || batch.points_m.empty()) return {};
+  if (batch.intensity.empty()) {
+    return "no intensity: the reflectivity layer maps each ground return's intensity, and the "
+           "input gives none";
+  }
+  if (batch.intensity.size() != batch.points_m.size()) {
+    return std::to_string(batch.intensity.size()) + " intensities for " +
+           std::to_string(batch.points_m.size()) + " points";
+  }
+  if (!batch.has_vehicle_origin) {
+    return "no vehicle pose: the reflectivity layer selects ground returns by their height "
+           "above the vehicle frame (a point-cloud map has none)";
+  }
+  if (!batch.vehicle_origin_m.allFinite()) return "the vehicle origin is not finite";
   return {};
 }
 
@@ -104,7 +129,14 @@ std::string MapBuilderOptions::describe() const {
     << " sigma_floor=" << em.sigma_floor_m << "m blur_sigma=" << blur_sigma_m
     << "m blur_radius=" << blur_radius_cells << " z_bin=" << z_bin_m
     << "m min_own_points=" << min_own_points << " range=[" << min_range_m << "," << max_range_m
-    << "]m z=[" << min_z_m << "," << max_z_m << "]m voxel=" << voxel_m << "m";
+    << "]m z=[" << min_z_m << "," << max_z_m << "]m voxel=" << voxel_m
+    << "m layer=" << mapLayerName(layer);
+  if (layer == MapLayer::kReflectivity) {
+    s << " metres_per_unit=" << reflectivity.metres_per_unit
+      << " ground_height=" << reflectivity.ground_height_m << "m ground_band=["
+      << reflectivity.ground_min_m << "," << reflectivity.ground_max_m
+      << "]m ground_range=" << reflectivity.max_range_m << "m";
+  }
   return s.str();
 }
 
@@ -258,20 +290,33 @@ Status MapBuilder::Impl::addBatch(const PointBatch& batch) {
   if (!m.failure.empty()) return Status::failure("map builder unusable: " + m.failure);
   if (m.finished) return Status::failure("map builder: addBatch after finish");
   const MapBuilderOptions& o = m.options;
+  const std::string lacking = o.batchError(batch);
+  if (!lacking.empty()) {  // nothing taken: the builder stays usable
+    return Status::failure("map builder (" + std::string(mapLayerName(o.layer)) +
+                           " layer): batch " + std::to_string(m.stats.batches + 1) + ": " +
+                           lacking);
+  }
   MapBuildStats& st = m.stats;
   ++st.batches;
   if (!batch.has_sensor_origin) ++st.batches_without_origin;
   const bool range = batch.has_sensor_origin && batch.sensor_origin_m.allFinite();
   const double r_lo2 = o.min_range_m * o.min_range_m, r_hi2 = o.max_range_m * o.max_range_m;
   const Eigen::Vector3d& s = batch.sensor_origin_m;
+  // The reflectivity layer bins v = intensity * metres_per_unit (reflectivity_layer.h) of the
+  // ground returns; the height layer bins z, and reads nothing else of the batch.
+  const bool reflectivity = o.layer == MapLayer::kReflectivity;
+  const ReflectivityLayerOptions& refl = o.reflectivity;
+  const Eigen::Vector3d& vehicle = batch.vehicle_origin_m;
   if (o.voxel_m > 0.0) m.voxels.clear();
-  for (const Eigen::Vector3f& pf : batch.points_m) {
+  for (size_t i = 0; i < batch.points_m.size(); ++i) {
+    const Eigen::Vector3f& pf = batch.points_m[i];
     ++st.input_points;
     const double x = pf.x(), y = pf.y(), z = pf.z();
-    if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z) ||
+    const double value = reflectivity ? refl.value(batch.intensity[i]) : z;
+    if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z) || !std::isfinite(value) ||
         std::abs(x - o.geometry.origin_x_m) > kMaxHorizontalM ||
         std::abs(y - o.geometry.origin_y_m) > kMaxHorizontalM ||
-        std::abs(z) > kMaxAbsInputHeightM) {
+        std::abs(z) > kMaxAbsInputHeightM || std::abs(value) > kMaxAbsInputHeightM) {
       ++st.dropped_invalid;
       continue;
     }
@@ -287,12 +332,17 @@ Status MapBuilder::Impl::addBatch(const PointBatch& batch) {
       ++st.dropped_height;
       continue;
     }
+    if (reflectivity &&
+        !refl.isGround(z - vehicle.z(), std::hypot(x - vehicle.x(), y - vehicle.y()))) {
+      ++st.dropped_not_ground;
+      continue;
+    }
     if (o.voxel_m > 0.0 && !m.voxels.insert(voxelKey(x, y, z, o.voxel_m)).second) {
       ++st.dropped_voxel;
       continue;
     }
     ++st.kept_points;
-    Status bs = m.binPoint(x, y, z);
+    Status bs = m.binPoint(x, y, value);
     if (!bs) {
       // Frees the disk at once; the output directory is as it was.
       return Status::failure(m.failWith(bs.error()));
@@ -312,6 +362,11 @@ Status addAllBatches(PointBatchSource& source, MapBuilder& builder,
       auto more = source.next(batch);
       if (!more) return Status::failure(more.error());
       if (!*more) return Status::success();
+      const std::string lacking = builder.options().batchError(batch);
+      if (!lacking.empty()) {
+        return Status::failure(source.describe() + ": batch " + std::to_string(done + 1) + ": " +
+                               lacking);
+      }
       Status s = builder.addBatch(batch);
       if (!s) return s;
       ++done;

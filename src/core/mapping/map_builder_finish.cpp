@@ -86,6 +86,9 @@ Result<MapBuildStats> MapBuilder::Impl::finish(const BuildProgressCallback& prog
                 std::to_string(st.dropped_invalid) + " invalid, " +
                 std::to_string(st.dropped_range) + " out of range, " +
                 std::to_string(st.dropped_height) + " outside the height band, " +
+                (o.layer == MapLayer::kReflectivity
+                     ? std::to_string(st.dropped_not_ground) + " not ground returns, "
+                     : std::string()) +
                 std::to_string(st.dropped_voxel) + " removed by the voxel filter");
   }
   Status flushed = spill->flushAll();
@@ -180,6 +183,8 @@ Result<MapBuildStats> MapBuilder::Impl::finish(const BuildProgressCallback& prog
   MapManifest manifest;
   manifest.geometry = o.geometry;
   manifest.georeference = o.georeference;
+  manifest.layer = o.layer;
+  if (o.layer == MapLayer::kReflectivity) manifest.reflectivity = o.reflectivity;
   manifest.provenance = o.provenance.empty() ? o.describe() : o.provenance + "; " + o.describe();
   {
     WorkerPool pool(abort);

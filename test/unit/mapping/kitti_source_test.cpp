@@ -120,6 +120,37 @@ TEST(KittiSource, FieldLayoutDetectionAndErrors) {
   EXPECT_FALSE(parseIndexList("5-3").ok());
 }
 
+TEST(KittiSource, XyziScansCarryIntensitiesAndTheScanFrameAsTheVehicle) {
+  TempDir d("gmm_kitti");
+  fs::create_directory(d.path + "/velodyne");
+  writeScan(d.path + "/velodyne/000000.bin", {{1.f, 0.f, -1.7f, 11.f}, {0.f, 2.f, -1.7f, 110.f}},
+            true);
+  std::ofstream(d.path + "/poses.txt") << "1 0 0 10 0 1 0 20 0 0 1 1.73\n";
+  KittiSourceOptions o;
+  o.scans_directory = d.path;
+  o.fields = KittiFields::kXyzi;
+  auto src = KittiScanSource::open(o);
+  ASSERT_TRUE(src.ok()) << src.error();
+  PointBatch b;
+  ASSERT_TRUE(*(*src)->next(b));
+  EXPECT_TRUE(b.hasIntensity());
+  EXPECT_EQ(b.intensity, (std::vector<float>{11.f, 110.f}));
+  ASSERT_TRUE(b.has_vehicle_origin);
+  EXPECT_TRUE(b.vehicle_origin_m.isApprox(Eigen::Vector3d(10.0, 20.0, 1.73)));
+  // Levelled height above the scan's frame: -1.7 m, the ground of a Velodyne at 1.73 m.
+  EXPECT_NEAR(b.points_m[1].z() - b.vehicle_origin_m.z(), -1.7, 1e-6);
+
+  // xyz records carry none; readKittiScan clears what it was given.
+  writeScan(d.path + "/xyz.bin", {{1.f, 2.f, 3.f, 0.f}}, false);
+  std::vector<float> intensity = {5.f};
+  auto xyz = readKittiScan(d.path + "/xyz.bin", KittiFields::kXyz, &intensity);
+  ASSERT_TRUE(xyz.ok());
+  EXPECT_TRUE(intensity.empty());
+  auto xyzi = readKittiScan(d.path + "/velodyne/000000.bin", KittiFields::kXyzi, &intensity);
+  ASSERT_TRUE(xyzi.ok());
+  EXPECT_EQ(intensity, (std::vector<float>{11.f, 110.f}));
+}
+
 // Fuzz reproducer test/fuzz/regressions/kitti/oom_index_list_60_ranges_of_1e7: 60 ranges of
 // 10^7 indices each (660 characters) made 6 x 10^8 ints (2.4 GB). Now the list as a whole holds
 // at most kMaxIndexListSize = 10^7 indices, with an error naming the item that exceeds it.

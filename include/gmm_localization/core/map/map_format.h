@@ -33,15 +33,20 @@
 //   weight ln(w) uniform in [ln 2^-20, 0] over 65535 steps, then the cell's weights are
 //          renormalised to sum 1: relative error <= 2.2e-4. w < 2^-20: the encoder fails.
 //
-// Manifest `manifest.gmm`, format version 2 (version 1 is still read):
+// Manifest `manifest.gmm`, format version 3 (versions 1 and 2 are still read):
 //   magic "GMMM", u16 version, u16 flags (0); geometry: f64 resolution [m], u32 tile size
 //   [cells], f64 origin x [m], f64 origin y [m]; georeference (georeference.h): u8 present,
-//   string datum, [version 2 only: u8 UTM zone 0..60 (0: text only), u8 north 0/1,] f64
-//   easting, northing, up of the map origin [m]; string provenance; u32 tile count, then per
-//   tile: i32 x, i32 y, string file name, u64 byte size, u32 tile CRC-32, f32 z min, f32
-//   z max [m], 4 x u32 cells with 0..3 components; u32 CRC-32. Strings: u32 length + bytes.
-//   A version 1 manifest's zone is taken from its datum text when that names one
-//   (zoneFromDatumText); writers always write version 2.
+//   string datum, [version >= 2: u8 UTM zone 0..60 (0: text only), u8 north 0/1,] f64
+//   easting, northing, up of the map origin [m]; string provenance; [version >= 3: the layer
+//   (reflectivity_layer.h): u8 layer, 0 height or 1 reflectivity; for reflectivity only, its
+//   definition: f64 metres per intensity unit, f64 ground height, f64 ground band min, f64
+//   ground band max [m], f64 ground range [m] (checkReflectivityLayer's bounds);] u32 tile
+//   count, then per tile: i32 x, i32 y, string file name, u64 byte size, u32 tile CRC-32, f32
+//   z min, f32 z max [m], 4 x u32 cells with 0..3 components; u32 CRC-32. Strings: u32 length
+//   + bytes. A version 1 manifest's zone is taken from its datum text when that names one
+//   (zoneFromDatumText); manifests before version 3 are height maps. Writers always write
+//   version 3. In a reflectivity map every "z" and "height" of the tiles below (means, z
+//   ranges) is the value intensity x metres per unit instead [m].
 //
 // Failure behaviour: decoders and readers return a failure whose reason names the file and the
 // problem (missing, truncated, CRC mismatch, wrong magic, unsupported version, inconsistent
@@ -65,11 +70,12 @@
 #include "gmm_localization/core/map/georeference.h"
 #include "gmm_localization/core/map/gmm_tile.h"
 #include "gmm_localization/core/map/map_geometry.h"
+#include "gmm_localization/core/map/reflectivity_layer.h"
 
 namespace gmm_localization {
 
 constexpr uint16_t kTileFormatVersion = 1;      ///< tile files written and read
-constexpr uint16_t kManifestFormatVersion = 2;  ///< manifests written
+constexpr uint16_t kManifestFormatVersion = 3;  ///< manifests written
 constexpr uint16_t kOldestManifestVersion = 1;  ///< oldest manifest still read
 constexpr const char* kManifestFileName = "manifest.gmm";
 
@@ -108,6 +114,13 @@ struct MapManifest {
   MapGeometry geometry;
   Georeference georeference;
   std::string provenance;  ///< free text: tool, inputs and options that built the map
+  /// What the cells hold: heights, or the values of the ground returns' intensities (read as
+  /// kHeight from manifests before version 3).
+  MapLayer layer = MapLayer::kHeight;
+  /// The reflectivity layer's definition the map was built with (layer kReflectivity only; a
+  /// matcher checks that it selects and scales its ground returns alike). ground_height_m is
+  /// in the vehicle frame of the build's input (see PointBatch::vehicle_origin_m).
+  ReflectivityLayerOptions reflectivity;
   std::vector<TileInfo> tiles;
 };
 

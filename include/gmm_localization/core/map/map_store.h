@@ -45,6 +45,12 @@ class MapStore {
   const std::string& directory() const { return directory_; }
   const MapManifest& manifest() const { return manifest_; }
   const MapGeometry& geometry() const { return manifest_.geometry; }
+  /// What the cells hold (map_format.h, reflectivity_layer.h): kHeight for maps before format
+  /// version 3.
+  MapLayer layer() const { return manifest_.layer; }
+  /// The reflectivity layer's definition the map was built with (meaningful for
+  /// layer() == kReflectivity only).
+  const ReflectivityLayerOptions& reflectivity() const { return manifest_.reflectivity; }
 
   /// Ids of the tiles the map holds, ascending (x, then y).
   std::vector<TileId> tileIds() const;

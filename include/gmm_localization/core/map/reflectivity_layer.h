@@ -26,6 +26,7 @@
 // floor is 1.5 intensity units: the height machinery's bins, blur and floors fit as they are.
 
 #include <cmath>
+#include <string>
 
 namespace gmm_localization {
 
@@ -53,5 +54,15 @@ struct ReflectivityLayerOptions {
     return std::isfinite(h) && h >= ground_min_m && h <= ground_max_m && range_xy_m <= max_range_m;
   }
 };
+
+/// Empty when the options are within the bounds the map builder and the manifest accept, else
+/// the first offending field, its value and the allowed range: metres_per_unit in (0, 100],
+/// ground_height_m in [-100, 100] m, ground_min_m < ground_max_m both in [-10, 10] m,
+/// max_range_m in (0, 1000] m (all finite).
+std::string checkReflectivityLayer(const ReflectivityLayerOptions& options);
+
+/// One line, e.g. "value = intensity x 0.02 m; ground: [-0.3, 0.3] m around z = 0 m of the
+/// vehicle frame, within 40 m".
+std::string describeReflectivityLayer(const ReflectivityLayerOptions& options);
 
 }  // namespace gmm_localization

@@ -49,8 +49,10 @@ struct KittiSourceOptions {
 Result<std::map<int, Eigen::Isometry3d>> readKittiPoses(const std::string& path);
 /// The `Tr:` (velodyne -> camera 0) line of a KITTI odometry calib.txt.
 Result<Eigen::Isometry3d> readKittiCalibTr(const std::string& path);
-/// One scan's points in the sensor frame.
-Result<std::vector<Eigen::Vector3f>> readKittiScan(const std::string& path, KittiFields fields);
+/// One scan's points in the sensor frame. `intensity`, when given, receives one value per point
+/// from xyzi records (the fourth float) and is cleared for xyz records.
+Result<std::vector<Eigen::Vector3f>> readKittiScan(const std::string& path, KittiFields fields,
+                                                   std::vector<float>* intensity = nullptr);
 /// Bound on the indices of one index list, its ranges summed (repeats count): 10^7 (40 MB of
 /// ints, far beyond any sequence's scans), so a short argument cannot allocate gigabytes.
 constexpr size_t kMaxIndexListSize = 10000000;
@@ -58,6 +60,10 @@ constexpr size_t kMaxIndexListSize = 10000000;
 /// kMaxIndexListSize indices (naming the item that exceeds it).
 Result<std::vector<int>> parseIndexList(const std::string& text);
 
+/// Batches carry the scan's intensities when its records are xyzi (else none), and the scan's
+/// frame (map_T_sensor) as the vehicle frame: the reflectivity layer's ground height is then
+/// given in the scans' frame (0 for scans in a base_link on the ground, about -1.73 m for
+/// KITTI's Velodyne frame).
 class KittiScanSource : public PointBatchSource {
  public:
   /// Reads the poses, resolves every selected scan's file (fails if a selected scan lacks a

@@ -32,13 +32,26 @@
 // max_samples_per_cell distinct bins after the blur (tall walls) has adjacent bins merged
 // (keeping each merged sample at its weighted centroid) until it fits, which bounds EM's cost.
 //
+// Layers (core/map/reflectivity_layer.h; the manifest records which): the height layer, the
+// paper's map, bins each kept point's z. The reflectivity layer (Levinson and Thrun's ground
+// reflectivity, the baseline of the paper's Table I) keeps the ground returns only and bins
+// their value v = intensity * metres_per_unit in place of z; "z" and "height" in the binning,
+// blur and fit below then mean v, and everything else (tiles, EM, swap) is the same. Its
+// batches must carry one intensity per point and a vehicle origin (MapBuilderOptions::
+// batchError): a batch without either fails addBatch with the reason.
+//
 // Filters, applied per point in this order (each counted in MapBuildStats):
 //  - non-finite coordinates, and points beyond 1e7 m of the grid origin or 1e6 m in height
-//    (no map frame is that large; keep coordinates local), are dropped;
+//    (no map frame is that large; keep coordinates local), are dropped; in the reflectivity
+//    layer also a non-finite intensity or a value beyond 1e6 m;
 //  - range: distance from the batch's sensor origin outside [min_range_m, max_range_m] is
 //    dropped (vehicle self-returns, far and sparse returns). Batches without a sensor origin
 //    (a point-cloud map) are not range-filtered;
-//  - height band: map-frame z outside [min_z_m, max_z_m] is dropped;
+//  - height band: map-frame z outside [min_z_m, max_z_m] is dropped (in both layers: z is the
+//    point's height);
+//  - ground (reflectivity layer only): a point that is not a ground return
+//    (ReflectivityLayerOptions::isGround on its z minus the vehicle origin's z and its
+//    horizontal distance to the vehicle origin) is dropped;
 //  - voxel pre-filter (voxel_m > 0): within one batch, only the first point of each
 //    voxel_m-sized cube is kept, which evens out the density near the sensor. Off by default.
 //
@@ -94,6 +107,7 @@
 #include "gmm_localization/core/common/result.h"
 #include "gmm_localization/core/map/map_format.h"
 #include "gmm_localization/core/map/map_geometry.h"
+#include "gmm_localization/core/map/reflectivity_layer.h"
 #include "gmm_localization/core/mapping/em_fitter.h"
 #include "gmm_localization/core/mapping/point_batch.h"
 
@@ -126,10 +140,18 @@ struct MapBuilderOptions {
   Georeference georeference;  ///< written to the manifest
   std::string provenance;     ///< written to the manifest (inputs, tool, options)
 
+  MapLayer layer = MapLayer::kHeight;     ///< what the cells hold; written to the manifest
+  ReflectivityLayerOptions reflectivity;  ///< layer kReflectivity: ground returns and scale
+
   /// Empty when valid, else the first offending field, its value and the allowed range.
   std::string validate() const;
-  /// One line with the options that shape the map (for provenance and logs).
+  /// One line with the options that shape the map (for provenance and logs), the layer too.
   std::string describe() const;
+  /// Empty when `batch` carries what the layer needs, else what it lacks (one sentence): the
+  /// reflectivity layer needs one intensity per point and a vehicle origin (an empty batch
+  /// needs nothing); the height layer needs nothing beyond the points. A reader's caller may
+  /// check it first to name the input in the reason (addAllBatches does).
+  std::string batchError(const PointBatch& batch) const;
 };
 
 struct MapBuildStats {
@@ -141,8 +163,9 @@ struct MapBuildStats {
   uint64_t dropped_range = 0;
   uint64_t dropped_height = 0;
   uint64_t dropped_voxel = 0;
-  uint64_t spill_bytes = 0;  ///< written to the spill directory
-  uint64_t tiles = 0;        ///< tile files written
+  uint64_t dropped_not_ground = 0;  ///< reflectivity layer: not a ground return
+  uint64_t spill_bytes = 0;         ///< written to the spill directory
+  uint64_t tiles = 0;               ///< tile files written
   std::array<uint64_t, kMaxMixtureComponents + 1> cells_by_components{};  ///< over written tiles
   uint64_t map_bytes = 0;  ///< tile files + manifest [bytes]
   EmFitterCounters em;     ///< EM work over all cells (fits, runs, iterations, samples)
@@ -171,7 +194,8 @@ class MapBuilder {
   MapBuilder& operator=(const MapBuilder&) = delete;
 
   /// Pass 1 for one batch. Fails on a spill write error (the builder is then unusable, and its
-  /// staging directory already removed).
+  /// staging directory already removed), and, before any point is taken (the builder stays
+  /// usable), on a batch that lacks what the layer needs (options().batchError).
   Status addBatch(const PointBatch& batch);
 
   /// Pass 2 and the swap. Call once; the builder is spent afterwards (and the lock released).
@@ -193,7 +217,8 @@ class MapBuilder {
 
 /// Reads every batch of `source` into `builder`. `on_batch(done, total)` is called after each
 /// batch (total = source.sizeHint(), 0 when unknown); return false from it to stop early (not
-/// an error). Fails on the first source or builder failure.
+/// an error). Fails on the first source or builder failure; a batch that lacks what the layer
+/// needs fails with a reason naming the source (source.describe()) and the batch.
 Status addAllBatches(PointBatchSource& source, MapBuilder& builder,
                      const std::function<bool(size_t done, size_t total)>& on_batch = {});
 

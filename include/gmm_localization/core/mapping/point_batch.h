@@ -18,21 +18,39 @@ struct PointBatch {
   /// Points in the map frame [m]. Keep coordinates local (|x|, |y| below ~100 km) so float
   /// keeps millimetres: subtract a georeference offset before filling the batch.
   std::vector<Eigen::Vector3f> points_m;
+  /// One intensity per point, as the input gives it (KITTI's fourth float, a PointCloud2's or
+  /// a PCD file's `intensity`), or empty when the input has none. The height layer ignores it;
+  /// the reflectivity layer (core/map/reflectivity_layer.h) maps it, and needs it.
+  std::vector<float> intensity;
   /// Sensor origin in the map frame [m] when known (a scan); a point-cloud map has none, and
   /// then the builder's range filter does not apply to the batch.
   bool has_sensor_origin = false;
   Eigen::Vector3d sensor_origin_m = Eigen::Vector3d::Zero();
+  /// Origin of the vehicle frame in the map frame [m] when known (a scan with a pose): the
+  /// reference of the reflectivity layer's ground returns. A point's levelled height above the
+  /// vehicle frame is points_m.z - vehicle_origin_m.z, its ground range the horizontal distance
+  /// to vehicle_origin_m. The vehicle frame is the scans' own frame for KITTI scans and the
+  /// poses' frame (e.g. base_link) for a rosbag; a point-cloud map has none.
+  bool has_vehicle_origin = false;
+  Eigen::Vector3d vehicle_origin_m = Eigen::Vector3d::Zero();
+
+  /// True when every point has an intensity.
+  bool hasIntensity() const { return !points_m.empty() && intensity.size() == points_m.size(); }
 
   void clear() {
     points_m.clear();
+    intensity.clear();
     has_sensor_origin = false;
     sensor_origin_m.setZero();
+    has_vehicle_origin = false;
+    vehicle_origin_m.setZero();
   }
 };
 
 /// Fills `batch` with sensor-frame points moved into the map frame by map_T_sensor (computed in
 /// double precision) and sets the sensor origin to map_T_sensor's translation. Non-finite points
-/// are kept (the builder counts and drops them).
+/// are kept (the builder counts and drops them). The intensities and the vehicle origin are
+/// left as they are (the caller's).
 void setBatchFromSensorFrame(const std::vector<Eigen::Vector3f>& points_sensor,
                              const Eigen::Isometry3d& map_T_sensor, PointBatch& batch);
 
