@@ -4,11 +4,14 @@
 # them; the KITTI reader is in the ROS-free core (core/mapping/kitti_source.h).
 add_library(gmm_map_readers STATIC
   src/tools/build_map/build_map_georeference.cpp
+  src/tools/build_map/build_map_help.cpp
+  src/tools/build_map/build_map_layer_args.cpp
   src/tools/build_map/build_map_options.cpp
   src/tools/build_map/build_map_pcd.cpp
   src/tools/build_map/build_map_rosbag.cpp
   src/tools/build_map/build_map_synthetic.cpp
   src/tools/build_map/lzf.cpp
+  src/tools/build_map/pcd_header.cpp
   src/tools/build_map/pcd_reader.cpp
   src/tools/common/progress_bar.cpp)
 set_target_properties(gmm_map_readers PROPERTIES POSITION_INDEPENDENT_CODE ON)
@@ -49,6 +52,14 @@ if(CATKIN_ENABLE_TESTING)
   target_compile_definitions(tools_build_map_overwrite_test PRIVATE
     GMM_BUILD_MAP_BINARY="$<TARGET_FILE:build_map>" GMM_MAP_INFO_BINARY="$<TARGET_FILE:map_info>")
   add_dependencies(tools_build_map_overwrite_test build_map map_info)
+  # build_map --layer reflectivity: the readers' intensities and vehicle origins, the command
+  # line's refusals, and build_map + map_info on a tiny KITTI directory of a painted road.
+  catkin_add_gtest(tools_build_map_layer_test test/tools/build_map/build_map_layer_test.cpp
+    WORKING_DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR})
+  target_link_libraries(tools_build_map_layer_test gmm_map_readers gtest_main)
+  target_compile_definitions(tools_build_map_layer_test PRIVATE
+    GMM_BUILD_MAP_BINARY="$<TARGET_FILE:build_map>" GMM_MAP_INFO_BINARY="$<TARGET_FILE:map_info>")
+  add_dependencies(tools_build_map_layer_test build_map map_info)
   # The PCD reader against malformed, double-precision, tiled and junk-laden files; PCL only
   # writes fixtures (its binary_compressed writer and LZF compressor).
   catkin_add_gtest(tools_build_map_pcd_test test/tools/build_map/pcd_reader_test.cpp

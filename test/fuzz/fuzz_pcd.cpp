@@ -2,7 +2,8 @@
 // PcdFileReader with its ascii, binary and binary_compressed/LZF paths). The input is a whole
 // .pcd file (an in-memory file). The reader's contract: open() checks everything that can be
 // checked before decoding, so once open() has accepted a file, read() delivers exactly POINTS
-// points and fails only when the file changes (it does not change here).
+// points (and as many intensities when the file has an intensity field) and fails only when the
+// file changes (it does not change here).
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -27,12 +28,17 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (!reader) return 0;
   const uint64_t points = (*reader)->header().points;
   uint64_t total = 0;
+  const bool has_intensity = (*reader)->header().intensity >= 0;
   std::vector<Eigen::Vector3d> xyz;
+  std::vector<float> intensity;
   for (;;) {
     xyz.clear();
-    auto n = (*reader)->read(4096, xyz);
+    intensity.clear();
+    auto n = (*reader)->read(4096, xyz, &intensity);
     FUZZ_CHECK(n.ok(), "read() failed after open() accepted the file: %s", n.error().c_str());
     FUZZ_CHECK(*n == xyz.size(), "read() returned %zu, delivered %zu", *n, xyz.size());
+    FUZZ_CHECK(intensity.size() == (has_intensity ? xyz.size() : 0), "%zu intensities for %zu",
+               intensity.size(), xyz.size());
     if (*n == 0) break;
     total += *n;
     FUZZ_CHECK(total <= points, "more points than POINTS");

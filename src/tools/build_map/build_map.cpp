@@ -154,6 +154,14 @@ int run(int argc, char** argv) {
       return 1;
     }
     if (!*more) break;
+    // What the layer needs (the reflectivity layer: intensities, a vehicle pose), checked here
+    // so that the reason names the input.
+    const std::string lacking = b.options().batchError(batch);
+    if (!lacking.empty()) {
+      std::cerr << "\nbuild_map: " << src.describe() << ": batch " << done + 1 << ": " << lacking
+                << "\n";
+      return 1;
+    }
     const double c1 = threadCpuSeconds();
     Status s = b.addBatch(batch);
     bin_cpu_s += threadCpuSeconds() - c1;
@@ -202,14 +210,23 @@ int run(int argc, char** argv) {
     std::printf("  dropped on read  %s\n", pcd->dropped().c_str());
   std::printf("  output           %s\n", c.builder.output_directory.c_str());
   std::printf("  options          %s\n", c.builder.describe().c_str());
+  // The reflectivity layer keeps the ground returns only: their definition and counts.
+  const bool reflectivity = c.builder.layer == MapLayer::kReflectivity;
+  const std::string layer_definition =
+      reflectivity ? " (" + describeReflectivityLayer(c.builder.reflectivity) + ")" : "";
+  const std::string not_ground =
+      reflectivity ? withCommas(s.dropped_not_ground) + " not ground, " : "";
+  std::printf("  layer            %s%s\n", mapLayerName(c.builder.layer), layer_definition.c_str());
   std::printf(
       "  input points     %s in %s batches (%s without sensor origin: not range-filtered)\n",
       withCommas(s.input_points).c_str(), withCommas(s.batches).c_str(),
       withCommas(s.batches_without_origin).c_str());
-  std::printf("  points kept      %s (%s); dropped: %s invalid, %s range, %s height, %s voxel\n",
-              withCommas(s.kept_points).c_str(), pct(s.kept_points, s.input_points).c_str(),
-              withCommas(s.dropped_invalid).c_str(), withCommas(s.dropped_range).c_str(),
-              withCommas(s.dropped_height).c_str(), withCommas(s.dropped_voxel).c_str());
+  std::printf(
+      "  points kept      %s (%s)%s; dropped: %s invalid, %s range, %s height, %s%s voxel\n",
+      withCommas(s.kept_points).c_str(), pct(s.kept_points, s.input_points).c_str(),
+      reflectivity ? " as ground returns" : "", withCommas(s.dropped_invalid).c_str(),
+      withCommas(s.dropped_range).c_str(), withCommas(s.dropped_height).c_str(), not_ground.c_str(),
+      withCommas(s.dropped_voxel).c_str());
   std::printf("  cells            %s in tiles; %s with data\n", withCommas(cells).c_str(),
               withCommas(non_empty).c_str());
   for (int k = 0; k <= kMaxMixtureComponents; ++k) {

@@ -20,118 +20,10 @@ std::string text(double v) {
   return s.str();
 }
 
-/// The cell sizes a map may have: the map format's bounds (map_format.h), which the manifest
-/// reader enforces, so that build_map never writes a map the map server cannot open.
-std::string resolutionRange() {
-  return "[" + text(kMinMapResolutionM) + ", " + text(kMaxMapResolutionM) + "] m";
-}
-
-const char* helpTemplate() {
-  return R"(build_map: build a Gaussian mixture map (Wolcott & Eustice 2015, section III) from LIDAR data.
-
-Usage: build_map --output DIR INPUT [options]
-
-Input (exactly one kind):
-  --pcd FILE|DIR           a point-cloud map (PCD v0.5-0.7: ascii, binary or binary_compressed;
-                           x y z of any numeric type, F4, F8, I/U 1-8 bytes, read in double),
-                           e.g. from LIO-SAM, FAST-LIO or hdl_graph_slam. Repeat for several
-                           files; a directory stands for every *.pcd in it, sorted by name
-                           (Autoware's tiles). Every file is checked before the build starts
-                           (header, data size, compressed stream): a bad file is an error
-                           naming it. No sensor origins, so the range filter does not apply.
-                           Files are streamed in batches of --pcd-batch points (1000000).
-    --transform X,Y,Z,ROLL,PITCH,YAW   or X,Y,Z,QX,QY,QZ,QW: the files' frame in the world
-                           frame [m, deg], applied to every point first (e.g. to level
-                           FAST-LIO's first-IMU frame); --offset is subtracted after it:
-                           p_map = transform * p_file - offset, in double, then float
-    --max-abs-z M          drop (and count) points with map-frame |z| above M, e.g. junk
-                           returns far above the map (3000); non-finite points are dropped too
-  --kitti DIR              KITTI-style scans: DIR/NNNNNN.bin, DIR/NNNNNN/points.bin or
-                           DIR/velodyne/NNNNNN.bin, float32 little-endian records
-    --kitti-fields F       auto | xyz | xyzi (auto: xyzi under velodyne/, else from the file
-                           size, 12 vs 16 bytes per point; a multiple of 48 bytes is ambiguous)
-    --poses FILE           poses: KITTI 3x4 rows (line i = scan i) or 'id x y z qx qy qz qw'
-                           lines (default DIR/graph.txt, else DIR/poses.txt)
-    --scans LIST           scans to use, e.g. 0,2,4-9 (default: every scan with a pose)
-    --kitti-calib FILE     KITTI odometry calib.txt: poses are camera-0 poses; map frame =
-                           first Velodyne frame (z up)
-  --bag FILE               a rosbag with sensor_msgs/PointCloud2 scans and their poses
-    --cloud-topic T        (/velodyne_points)
-    --pose-topic T         nav_msgs/Odometry, geometry_msgs/PoseStamped or
-                           PoseWithCovarianceStamped, interpolated to each scan's stamp
-                           (/ground_truth/odom)
-    --pose-tf PARENT,CHILD instead of a pose topic: the poses of CHILD in PARENT from /tf
-                           (e.g. map,base_link; chains such as map -> odom -> base_link and
-                           /tf_static edges are composed)
-    --extrinsic X,Y,Z,ROLL,PITCH,YAW   or X,Y,Z,QX,QY,QZ,QW: the cloud frame in the pose's
-                           child frame [m, deg]. Default: composed from /tf_static (any chain
-                           of static transforms between the two frames), identity if the
-                           frames are equal.
-    --max-pose-gap S       skip scans whose bracketing poses are further apart (0.25 s)
-    --every N              use every N-th scan (1)
-    --time-field NAME      the per-point time used to deskew each scan with the interpolated
-                           poses. Default: the matcher's reader's choice of time, t and
-                           timestamp (velodyne, Ouster, Hesai, RoboSense, Livox; relative or
-                           absolute, s or ns). Clouds without times, or with times that make
-                           no sense (counted), are not deskewed
-    --no-deskew            ignore per-point times
-  --synthetic-street M     a generated straight street of M metres (facades, parked cars,
-                           trees, poles, awnings) scanned by a simulated 32-laser LIDAR
-    --seed N (1)  --scan-spacing M (1.0)  --azimuth-step DEG (0.2)
-
-Output:
-  --output DIR, --out DIR  map directory (created); refuses to replace a map unless --overwrite
-  --overwrite              replace the map in DIR: the new map is built beside it and swapped
-                           in when complete; a failed or killed build leaves the old map intact
-
-Map (defaults follow the paper):
-  --resolution M           cell size, in @RESOLUTION_RANGE@ (0.2)
-  --tile-size N            cells per tile edge (320)
-  --origin X,Y             map-frame corner of cell (0, 0) (0,0)
-  --k-max K                most Gaussians per cell, 1..3 (2)
-  --criterion C            model selection: icl | bic (icl; see em_fitter.h)
-  --sigma-floor M          smallest sigma, ~ sensor range noise (0.03)
-  --blur-sigma M           Gaussian blur with neighbouring columns (0.1; 0 = off)
-  --blur-radius N          blur half-width in cells (1)
-  --z-bin M                z histogram bin (0.01)
-  --min-own-points N       returns a cell needs in its own column (1)
-
-Filters (applied in this order; counts in the summary):
-  --min-range M, --max-range M   distance from the scan's sensor origin (1, 120); not for PCD
-  --min-z M, --max-z M     map-frame height band (unbounded)
-  --voxel M                per-scan voxel pre-filter edge, 0 = off (0)
-  --offset X,Y,Z           subtracted from every input point and pose, e.g. a UTM origin, to
-                           keep map coordinates small (in double, before float: a float32 map
-                           keeps centimetres only within 131 km of its origin); recorded as
-                           the map's georeference origin
-
-Georeference (map_info prints it; the GNSS initializer needs a zone):
-  --utm-zone ZONE          WGS84 UTM zone of the input's grid: 17N, 33S, EPSG:32617
-  --epsg CODE              the same as an EPSG code (32601-32660 north, 32701-32760 south)
-  --georef-origin E,N,U    the input is already local: the map origin's grid coordinates
-  --mgrs-origin REF[,U]    the same as an MGRS reference (names the zone too)
-  --datum TEXT             free text kept with the map, e.g. "heights above the geoid"
-
-Resources:
-  --threads N              fitting threads (2)
-  --temp-dir DIR           where the spill files go (default: inside --output)
-  --spill-buffer-mb MB     in-memory spill buffers (256)
-  --no-deflate             store tiles uncompressed
-  --quiet                  no progress bar
-  --help
-)";
-}
-
 }  // namespace
 
-const char* buildMapHelp() {
-  static const std::string help = [] {
-    std::string h = helpTemplate();
-    const std::string key = "@RESOLUTION_RANGE@";
-    h.replace(h.find(key), key.size(), resolutionRange());
-    return h;
-  }();
-  return help.c_str();
+std::string resolutionRange() {
+  return "[" + text(kMinMapResolutionM) + ", " + text(kMaxMapResolutionM) + "] m";
 }
 
 Result<std::vector<double>> parseNumberList(const std::string& option, const std::string& text,
@@ -232,7 +124,19 @@ Result<BuildMapConfig> parseBuildMapArgs(int argc, char** argv) {
   };
   int k_max = b.em.max_components, seed = 1, spill_mb = 256;
   double pcd_batch = 1e6;
-  std::string pcd_only;  // the last PCD-only option given
+  std::string pcd_only;           // the last PCD-only option given
+  std::string reflectivity_only;  // the last option of the reflectivity layer given
+  ReflectivityLayerOptions& refl = b.reflectivity;
+  auto reflNum = [&](double& out) {
+    return Handler([&out, &error, &reflectivity_only](const std::string& o, const std::string& v) {
+      auto x = number(o, v);
+      if (x)
+        out = *x;
+      else
+        error = x.error();
+      reflectivity_only = o;
+    });
+  };
   std::map<std::string, Handler> valued = {
       {"--output", str(b.output_directory)},
       {"--out", str(b.output_directory)},  // the other tools' name
@@ -363,6 +267,28 @@ Result<BuildMapConfig> parseBuildMapArgs(int argc, char** argv) {
       {"--min-z", num(b.min_z_m)},
       {"--max-z", num(b.max_z_m)},
       {"--voxel", num(b.voxel_m)},
+      {"--layer",
+       [&](const std::string& o, const std::string& v) {
+         if (v == "height")
+           b.layer = MapLayer::kHeight;
+         else if (v == "reflectivity")
+           b.layer = MapLayer::kReflectivity;
+         else
+           error = o + ": '" + v + "' is not height or reflectivity";
+       }},
+      {"--ground-height", reflNum(refl.ground_height_m)},
+      {"--ground-band",
+       [&](const std::string& o, const std::string& v) {
+         auto l = parseNumberList(o, v, 2);
+         if (l) {
+           refl.ground_min_m = (*l)[0];
+           refl.ground_max_m = (*l)[1];
+         } else
+           error = l.error();
+         reflectivity_only = o;
+       }},
+      {"--ground-range", reflNum(refl.max_range_m)},
+      {"--reflectivity-scale", reflNum(refl.metres_per_unit)},
       {"--offset",
        [&](const std::string& o, const std::string& v) {
          auto l = parseNumberList(o, v, 3);
@@ -421,6 +347,8 @@ Result<BuildMapConfig> parseBuildMapArgs(int argc, char** argv) {
   if (!pcd_only.empty() && c.input != InputKind::kPcd)
     return R::failure(pcd_only + " applies to --pcd input only");
   if (!(c.pcd_max_abs_z_m > 0.0)) return R::failure("--max-abs-z must be > 0");
+  const std::string layer_error = checkLayerArgs(c, reflectivity_only);
+  if (!layer_error.empty()) return R::failure(layer_error);
   if (c.bag.every < 1) return R::failure("--every must be >= 1");
   if (pose_topic_given && !c.bag.pose_tf_child.empty()) {
     return R::failure("--pose-topic and --pose-tf: give one source of poses");
@@ -444,7 +372,7 @@ Result<BuildMapConfig> parseBuildMapArgs(int argc, char** argv) {
   }
   const std::string bounds = checkMapGeometryBounds(b.geometry);
   if (!bounds.empty()) return R::failure("map geometry (--tile-size, --origin): " + bounds);
-  const std::string invalid = b.validate();
+  const std::string invalid = withLayerOption(b.validate());
   if (!invalid.empty()) return R::failure("invalid options: " + invalid);
   return c;
 }

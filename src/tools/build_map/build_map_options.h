@@ -52,10 +52,23 @@ struct BuildMapConfig {
   bool help = false;
 };
 
-const char* buildMapHelp();
+const char* buildMapHelp();  // build_map_help.cpp
+
+/// The cell sizes a map may have, "[min, max] m": the map format's bounds (map_format.h),
+/// which the manifest reader enforces, so that build_map never writes a map the map server
+/// cannot open.
+std::string resolutionRange();
 
 /// Parses argv; fails with a message naming the option. `help` set: print buildMapHelp().
 Result<BuildMapConfig> parseBuildMapArgs(int argc, char** argv);
+
+/// Empty when the map layer's options fit the input, else why (build_map_layer_args.cpp):
+/// `reflectivity_only` names an option of the reflectivity layer given (empty: none).
+std::string checkLayerArgs(const BuildMapConfig& config, const std::string& reflectivity_only);
+/// A MapBuilderOptions::validate() reason with the option that sets the reflectivity layer's
+/// field it names in front ("--ground-range: reflectivity.max_range_m=0 must be ..."); other
+/// reasons are returned as they are.
+std::string withLayerOption(const std::string& error);
 
 /// "a,b,c" -> doubles (exactly `count` of them).
 Result<std::vector<double>> parseNumberList(const std::string& option, const std::string& text,

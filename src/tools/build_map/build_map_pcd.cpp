@@ -90,6 +90,7 @@ struct PcdSource::Impl {
   size_t file = 0;                        ///< index of the file being read
   std::unique_ptr<PcdFileReader> reader;  ///< open on files[file], or null
   std::vector<Eigen::Vector3d> xyz;
+  std::vector<float> intensity;  ///< of xyz's points, when the file has an intensity field
   uint64_t read = 0, kept = 0, non_finite = 0, out_of_range = 0, far = 0;
   double far_max_m = 0.0;
   bool warned_float = false, ended = false;
@@ -181,7 +182,8 @@ Result<bool> PcdSource::next(PointBatch& batch) {
       m.reader = std::move(*r);
     }
     m.xyz.clear();
-    auto n = m.reader->read(m.options.batch_points, m.xyz);
+    m.intensity.clear();
+    auto n = m.reader->read(m.options.batch_points, m.xyz, &m.intensity);
     if (!n) return Result<bool>::failure(n.error());
     if (*n > 0) break;
     m.reader.reset();  // this file is done
@@ -194,7 +196,10 @@ Result<bool> PcdSource::next(PointBatch& batch) {
     is_float32[k] = h.fields[axes[k]].type == 'F' && h.fields[axes[k]].size == 4;
   const Eigen::Isometry3d& t = m.options.world_T_file;
   batch.points_m.reserve(m.xyz.size());
-  for (const Eigen::Vector3d& p : m.xyz) {
+  const bool with_intensity = m.intensity.size() == m.xyz.size();
+  if (with_intensity) batch.intensity.reserve(m.xyz.size());
+  for (size_t i = 0; i < m.xyz.size(); ++i) {
+    const Eigen::Vector3d& p = m.xyz[i];
     ++m.read;
     if (!p.allFinite()) {
       ++m.non_finite;
@@ -228,6 +233,7 @@ Result<bool> PcdSource::next(PointBatch& batch) {
       m.far_max_m = std::max(m.far_max_m, extent);
     }
     batch.points_m.emplace_back(q.cast<float>());
+    if (with_intensity) batch.intensity.push_back(m.intensity[i]);
     ++m.kept;
   }
   return true;  // possibly empty, when every point of the batch was dropped

@@ -33,10 +33,11 @@ struct PcdSourceOptions {
 
 /// A point-cloud map in one or more PCD files (ascii, binary or binary_compressed; x, y, z of
 /// any numeric type, read in double: pcd_reader.h), fed in batches without sensor origin
-/// (range filters do not apply). open() checks every file (header, data size, compressed
-/// stream, ascii lines) before the first point is produced, so a bad file fails the build
-/// before it starts, with an error naming the file. Files are then read one at a time, in
-/// batches (only a binary_compressed file is held whole in memory, decompressed).
+/// (range filters do not apply) nor vehicle origin (no reflectivity layer), with the files'
+/// intensities when they have a field for them (PcdHeader::intensity). open() checks every file
+/// (header, data size, compressed stream, ascii lines) before the first point is produced, so a bad
+/// file fails the build before it starts, with an error naming the file. Files are then read one at
+/// a time, in batches (only a binary_compressed file is held whole in memory, decompressed).
 /// Dropped points (non-finite, |z| beyond max_abs_z_m) are counted (dropped()); next() fails
 /// at the end when no point at all was kept.
 class PcdSource : public PointBatchSource {
@@ -97,7 +98,10 @@ struct RosbagSourceOptions {
 /// geometry_msgs/PoseStamped or PoseWithCovarianceStamped) or /tf. Each scan's pose is
 /// interpolated at its header stamp (linear in position, slerp in rotation) between the two
 /// poses around it. With per-point times the scan is deskewed (see RosbagSourceOptions::deskew).
-/// The batch's sensor origin is the sensor's position at the stamp (used by the range filter).
+/// The batch's sensor origin is the sensor's position at the stamp (used by the range filter),
+/// its vehicle origin the pose's position at the stamp (the poses' frame is the vehicle frame of
+/// the reflectivity layer), and its intensities the clouds' float `intensity` field when they
+/// have one.
 /// Scans outside the poses' time span or across a gap longer than max_pose_gap_s, and
 /// malformed clouds (the reader's reasons: no float x/y/z fields, sizes that disagree), are
 /// skipped and counted (skipped()), never guessed.

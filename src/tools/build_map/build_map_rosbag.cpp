@@ -323,6 +323,11 @@ Result<bool> RosbagSource::next(PointBatch& batch) {
       }
       batch.has_sensor_origin = true;
       batch.sensor_origin_m = (m.o.map_T_world * pose * ext->second).translation();
+      // The poses' frame (e.g. base_link) at the stamp is the vehicle frame of the reflectivity
+      // layer's ground returns, as in the matcher, which levels each scan in base_link.
+      batch.has_vehicle_origin = true;
+      batch.vehicle_origin_m = (m.o.map_T_world * pose).translation();
+      if (data->intensity.size() == points.size()) batch.intensity = std::move(data->intensity);
       ++m.it;
       return true;
     }

@@ -21,16 +21,35 @@ constexpr double kMinRangeM = 1.0;
 constexpr double kRangeNoiseM = 0.02;
 constexpr double kFoliageDensity = 1.2;  // mean free path 1/1.2 m inside a canopy
 
+// Intensities (0..255, as a Velodyne reports calibrated reflectivity) of what a ray hits: the
+// reflectivity layer's input. Asphalt and lane paint as reflectivity_layer.h has them.
+constexpr float kAsphalt = 11.f, kPaint = 110.f, kConcrete = 40.f;
+constexpr float kFacade = 60.f, kAwning = 35.f, kCar = 30.f, kTrunk = 20.f, kPole = 50.f,
+                kFoliage = 25.f;
+constexpr double kLineHalfWidthM = 0.075;  // 0.15 m lines: the centre line and both edges
+
 struct Box {
   Eigen::Vector3d lo, hi;
+  float intensity;
 };
 struct Cylinder {  // vertical
   double x, y, r, z0, z1;
+  float intensity;
 };
 struct Sphere {  // porous canopy
   Eigen::Vector3d c;
   double r;
 };
+
+/// The ground's intensity at lateral offset y: asphalt with a painted centre line and edge
+/// lines on the road, concrete sidewalks.
+float groundIntensity(double y) {
+  const double a = std::abs(y);
+  if (a >= kRoadHalfWidthM) return kConcrete;
+  const double edge = kRoadHalfWidthM - 2.0 * kLineHalfWidthM;  // edge lines end at the curb
+  return a <= kLineHalfWidthM || std::abs(a - edge - kLineHalfWidthM) <= kLineHalfWidthM ? kPaint
+                                                                                         : kAsphalt;
+}
 
 double groundZ(double y) {
   const double a = std::abs(y);
@@ -103,31 +122,34 @@ SyntheticStreetSource::SyntheticStreetSource(const SyntheticStreetOptions& o)
     for (double x = x_lo; x < x_hi;) {  // buildings, setbacks, alleys, awnings
       const double len = uni(15.0, 45.0), setback = uni(0.0, 3.0), height = uni(6.0, 30.0);
       const double yf = kSidewalkOuterM + setback;
-      Box b{{x, side > 0 ? yf : -yf - 15.0, 0.0}, {x + len, side > 0 ? yf + 15.0 : -yf, height}};
+      Box b{{x, side > 0 ? yf : -yf - 15.0, 0.0},
+            {x + len, side > 0 ? yf + 15.0 : -yf, height},
+            kFacade};
       w.boxes.push_back(b);
       if (uni(0.0, 1.0) < 0.3) {
         const double a0 = x + 0.2 * len, a1 = x + 0.8 * len;
         w.boxes.push_back(
-            {{a0, side > 0 ? yf - 1.5 : -yf, 2.8}, {a1, side > 0 ? yf : -yf + 1.5, 3.0}});
+            {{a0, side > 0 ? yf - 1.5 : -yf, 2.8}, {a1, side > 0 ? yf : -yf + 1.5, 3.0}, kAwning});
       }
       x += len + uni(3.0, 6.0);
     }
     for (double x = x_lo; x < x_hi; x += uni(20.0, 50.0)) {  // second row behind the alleys
       w.boxes.push_back({{x, side > 0 ? 40.0 : -55.0, 0.0},
-                         {x + uni(15.0, 45.0), side > 0 ? 55.0 : -40.0, uni(6.0, 30.0)}});
+                         {x + uni(15.0, 45.0), side > 0 ? 55.0 : -40.0, uni(6.0, 30.0)},
+                         kFacade});
     }
     for (double x = x_lo; x < x_hi; x += 6.0) {  // parked cars
       if (uni(0.0, 1.0) > 0.6) continue;
       const double cx = x + uni(0.5, 1.1), cy = side * uni(5.9, 6.1);
-      w.boxes.push_back({{cx, cy - 0.9, 0.25}, {cx + 4.4, cy + 0.9, 1.5}});
+      w.boxes.push_back({{cx, cy - 0.9, 0.25}, {cx + 4.4, cy + 0.9, 1.5}, kCar});
     }
     for (double x = x_lo; x < x_hi; x += uni(12.0, 20.0)) {  // trees
       const double y = side * 9.5;
-      w.cylinders.push_back({x, y, 0.15, 0.0, 3.5});
+      w.cylinders.push_back({x, y, 0.15, 0.0, 3.5, kTrunk});
       w.canopies.push_back({Eigen::Vector3d(x, y, 5.0), uni(1.6, 2.4)});
     }
     for (double x = x_lo + 17.0; x < x_hi; x += 35.0) {  // poles
-      w.cylinders.push_back({x, side * 7.6, 0.12, 0.0, 7.0});
+      w.cylinders.push_back({x, side * 7.6, 0.12, 0.0, 7.0, kPole});
     }
   }
   w.objects = w.boxes.size() + w.cylinders.size() + w.canopies.size();
@@ -172,6 +194,7 @@ Result<bool> SyntheticStreetSource::next(PointBatch& batch) {
   }
   const int azimuths = static_cast<int>(std::round(360.0 / options_.azimuth_step_deg));
   batch.points_m.reserve(static_cast<size_t>(azimuths) * 32);
+  batch.intensity.reserve(static_cast<size_t>(azimuths) * 32);
   for (int laser = 0; laser < 32; ++laser) {
     const double el = (10.67 - laser * (41.34 / 31.0)) * M_PI / 180.0;
     for (int a = 0; a < azimuths; ++a) {
@@ -179,23 +202,35 @@ Result<bool> SyntheticStreetSource::next(PointBatch& batch) {
       const Eigen::Vector3d d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az),
                               std::sin(el));
       double t = kMaxRangeM;
-      if (d.z() < 0.0) {  // ground: refine on the crowned road / sidewalk height
+      float intensity = 0.f;  // of the nearest hit so far
+      if (d.z() < 0.0) {      // ground: refine on the crowned road / sidewalk height
         double tg = origin.z() / -d.z();
         for (int it = 0; it < 3; ++it)
           tg = (origin.z() - groundZ(origin.y() + tg * d.y())) / -d.z();
-        t = std::min(t, tg);
+        if (tg < t) {
+          t = tg;
+          intensity = groundIntensity(origin.y() + tg * d.y());
+        }
       }
-      for (const Box* b : boxes) hitBox(*b, origin, d, t);
-      for (const Cylinder* c : cyls) hitCylinder(*c, origin, d, t);
+      // Each hit test shortens t only for a nearer hit.
+      for (const Box* b : boxes)
+        if (hitBox(*b, origin, d, t)) intensity = b->intensity;
+      for (const Cylinder* c : cyls)
+        if (hitCylinder(*c, origin, d, t)) intensity = c->intensity;
       const double u = unit(rng);
-      for (const Sphere* s : canopies) hitCanopy(*s, origin, d, u, t);
+      for (const Sphere* s : canopies)
+        if (hitCanopy(*s, origin, d, u, t)) intensity = kFoliage;
       if (t >= kMaxRangeM || t < kMinRangeM) continue;
       const double r = t + noise(rng);
       batch.points_m.push_back((origin + r * d).cast<float>());
+      batch.intensity.push_back(intensity);
     }
   }
   batch.has_sensor_origin = true;
   batch.sensor_origin_m = origin;
+  // The vehicle frame: base_link on the road under the sensor.
+  batch.has_vehicle_origin = true;
+  batch.vehicle_origin_m = Eigen::Vector3d(xs, kSensorLaneY, groundZ(kSensorLaneY));
   return true;
 }
 

@@ -11,6 +11,9 @@
 // Sensor: 32 lasers from +10.67 to -30.67 deg, azimuth step as configured, 1.95 m above the
 // road in the right lane, one revolution every scan_spacing_m, 2 cm Gaussian range noise,
 // 1-100 m range, no motion distortion; poses are exact (the map is built from ground truth).
+// Intensities (for the reflectivity layer): asphalt 11 with 0.15 m lane lines of 110 (the
+// centre line and both edge lines), concrete sidewalks 40, facades 60, cars 30, poles 50,
+// trunks 20, foliage 25; the vehicle frame is base_link on the road under the sensor.
 
 #include <memory>
 #include <string>

@@ -61,13 +61,16 @@ struct PcdHeader {
   static const char* dataName(PcdData d);
 };
 
+/// A token for an error message: at most 40 characters, control bytes shown as '?', quoted.
+std::string quotedPcdToken(const std::string& s);
+
 /// Largest header accepted (bytes up to and including the DATA line).
 constexpr size_t kMaxPcdHeaderBytes = size_t{1} << 20;
 
 /// Parses and checks a header from the first bytes of a file (`text` may continue past the DATA
-/// line). Fails with the line number and the problem: no DATA line, an unknown or repeated
-/// keyword, a bad number, counts that disagree with FIELDS, a bad SIZE/TYPE pair, POINTS !=
-/// WIDTH * HEIGHT, x/y/z missing, repeated or with COUNT != 1, sizes that overflow.
+/// line; pcd_header.cpp). Fails with the line number and the problem: no DATA line, an unknown or
+/// repeated keyword, a bad number, counts that disagree with FIELDS, a bad SIZE/TYPE pair, POINTS
+/// != WIDTH * HEIGHT, x/y/z missing, repeated or with COUNT != 1, sizes that overflow.
 Result<PcdHeader> parsePcdHeader(const std::string& text);
 
 /// One PCD file, read point by point in batches. open() checks everything that can be checked
@@ -90,15 +93,19 @@ class PcdFileReader {
   const std::vector<std::string>& notes() const { return notes_; }
 
   /// Appends up to max_points points (x, y, z as stored, in double) to `xyz`; returns how many,
-  /// 0 at the end. Fails (naming the file) only when the file changed since open().
-  Result<size_t> read(size_t max_points, std::vector<Eigen::Vector3d>& xyz);
+  /// 0 at the end. Fails (naming the file) only when the file changed since open(). When
+  /// `intensity` is given and the file has an intensity field (header().intensity), one value
+  /// per point is appended to it too (as stored, narrowed to float).
+  Result<size_t> read(size_t max_points, std::vector<Eigen::Vector3d>& xyz,
+                      std::vector<float>* intensity = nullptr);
 
  private:
   PcdFileReader() = default;
   Status checkBinary(uint64_t file_bytes);
   Status loadCompressed(uint64_t file_bytes);
   Status scanAscii();
-  Result<size_t> readAscii(size_t n, std::vector<Eigen::Vector3d>& xyz, bool keep);
+  Result<size_t> readAscii(size_t n, std::vector<Eigen::Vector3d>& xyz, bool keep,
+                           std::vector<float>* intensity);
   std::string fail(const std::string& why) const;
 
   std::string path_;
@@ -111,7 +118,7 @@ class PcdFileReader {
   std::vector<uint8_t> buffer_;  ///< binary: one batch; compressed: the whole data
   char* line_ = nullptr;         ///< ascii line buffer (getline's)
   size_t line_capacity_ = 0;
-  std::array<size_t, 3> token_{};  ///< ascii: token index of x, y, z
+  std::array<size_t, 4> token_{};  ///< ascii: token index of x, y, z, intensity (when present)
 };
 
 }  // namespace tools

@@ -19,9 +19,10 @@ const char* kHelp = R"(map_info: summary, verification and export of a Gaussian 
 
 Usage: map_info MAP_DIR [options]
 
-Prints the manifest summary (geometry, georeference, provenance, tiles, cells with 0/1/2/3
-components, bytes on disk, extent), then loads every tile and checks its size, CRC-32 and
-header. Exit code: 0 sound, 3 when any tile is missing or corrupted, 1 when the manifest cannot
+Prints the manifest summary (format version, layer, geometry, georeference, provenance,
+tiles, cells with 0/1/2/3 components, bytes on disk, extent), then loads every tile and checks
+its size, CRC-32 and header. The layer is height (the paper's map) or reflectivity (cells over
+the ground returns' intensity x metres per unit instead of height: build_map --layer). Exit code: 0 sound, 3 when any tile is missing or corrupted, 1 when the manifest cannot
 be read, 2 on a usage error.
 
 Options:
@@ -115,14 +116,23 @@ int main(int argc, char** argv) {
   const MapGeometry& g = m.geometry;
   const MapSummary s = store->summary();
   std::printf("map              %s (format version %u)\n", dir.c_str(), m.format_version);
+  const bool reflectivity = m.layer == MapLayer::kReflectivity;
+  std::printf("layer            %s", mapLayerName(m.layer));
+  if (reflectivity) std::printf(" (%s)", describeReflectivityLayer(m.reflectivity).c_str());
+  std::printf("\n");
   std::printf("geometry         %.3f m cells, %d-cell tiles (%.1f m), origin (%.3f, %.3f) m\n",
               g.resolution_m, g.tile_size_cells, g.tileSizeM(), g.origin_x_m, g.origin_y_m);
   std::printf("georeference     %s\n", m.georeference.describe().c_str());
   std::printf("provenance       %s\n", m.provenance.c_str());
   std::printf("tiles            %zu\n", s.tiles);
-  std::printf(
-      "extent           x [%.1f, %.1f] m, y [%.1f, %.1f] m, z [%.2f, %.2f] m (mean -/+ 4 sigma)\n",
-      s.min_x_m, s.max_x_m, s.min_y_m, s.max_y_m, s.z_min_m, s.z_max_m);
+  // In a reflectivity map the tiles' z ranges are values: also shown as intensities.
+  std::printf("extent           x [%.1f, %.1f] m, y [%.1f, %.1f] m, %s [%.2f, %.2f] m", s.min_x_m,
+              s.max_x_m, s.min_y_m, s.max_y_m, reflectivity ? "value" : "z", s.z_min_m, s.z_max_m);
+  if (reflectivity) {
+    std::printf(" = intensity [%.1f, %.1f]", s.z_min_m / m.reflectivity.metres_per_unit,
+                s.z_max_m / m.reflectivity.metres_per_unit);
+  }
+  std::printf(" (mean -/+ 4 sigma)\n");
   const uint64_t non_empty = s.nonEmptyCells();
   std::printf("cells            %llu in tiles, %llu with data (%.3f km^2)\n",
               static_cast<unsigned long long>(s.cells()),
