@@ -39,7 +39,12 @@ MapServer::MapServer(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string&
   const auto first_version = static_cast<uint64_t>(ros::WallTime::now().toNSec() / 1000000);
   auto engine =
       ChunkEngine::create(options_.map_directory, options_.engine, callbacks, first_version);
-  if (!engine) throw ConfigError("cannot serve map_directory: " + engine.error());
+  if (!engine) {
+    throw ConfigError("cannot serve map_directory: " + engine.error() +
+                      layerHint(options_.map_directory, options_.layer));
+  }
+  const std::string layer = layerProblem(*(*engine)->store(), options_.layer);
+  if (!layer.empty()) throw ConfigError("cannot serve map_directory: " + layer);
   engine_ = std::move(*engine);
   publishIndex();
 
@@ -85,7 +90,7 @@ void MapServer::onUpdate() {
 
 bool MapServer::onLoadMap(LoadMap::Request& req, LoadMap::Response& res) {
   // Every tile of the new map is checked first: a truncated or CRC-broken one refuses the map.
-  const LoadMapOutcome outcome = loadMapDirectory(*engine_, req.map_directory);
+  const LoadMapOutcome outcome = loadMapDirectory(*engine_, req.map_directory, 5, options_.layer);
   res.success = outcome.success;
   res.message = outcome.message;
   if (!outcome.success) {

@@ -32,15 +32,42 @@ std::string badTiles(const MapStore& store, size_t max_listed) {
 
 }  // namespace
 
+std::string layerProblem(const MapStore& store, MapLayer wanted) {
+  if (store.layer() == wanted) return {};
+  const std::string d = store.directory();
+  if (wanted == MapLayer::kReflectivity) {
+    return "map '" + d +
+           "' holds the height layer, not the reflectivity layer: build it from the same inputs "
+           "with build_map --layer reflectivity --output MAP/reflectivity (localization.launch "
+           "method:=reflectivity serves MAP/reflectivity)";
+  }
+  return "map '" + d +
+         "' holds the reflectivity layer, not the height layer: serve it with layer: "
+         "reflectivity and the matcher's method: reflectivity (localization.launch "
+         "method:=reflectivity map:=MAP, not map:=MAP/reflectivity)";
+}
+
+std::string layerHint(const std::string& directory, MapLayer wanted) {
+  if (wanted != MapLayer::kReflectivity) return {};
+  return " (the reflectivity layer was asked for in '" + directory +
+         "': build it with build_map --layer reflectivity --output " + directory +
+         " from the inputs of the height map)";
+}
+
 LoadMapOutcome loadMapDirectory(ChunkEngine& engine, const std::string& directory,
-                                size_t max_listed) {
+                                size_t max_listed, MapLayer wanted) {
   LoadMapOutcome out;
   const std::string kept = "kept map '" + engine.store()->directory() + "': ";
   // Every tile is read once here (the 3 km Downtown map is 5 MB): a map with broken tiles
   // would otherwise be served with holes that the caller was told were not there.
   auto store = MapStore::open(directory);
   if (!store) {
-    out.message = kept + store.error();
+    out.message = kept + store.error() + layerHint(directory, wanted);
+    return out;
+  }
+  const std::string layer = layerProblem(*store, wanted);
+  if (!layer.empty()) {
+    out.message = kept + layer;
     return out;
   }
   const std::string bad = badTiles(*store, max_listed);

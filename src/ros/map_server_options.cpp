@@ -27,6 +27,13 @@ MapServerOptions loadMapServerOptions(const ParamSource& pnh) {
     throw ConfigError("parameter " + pnh.resolveName("map_directory") +
                       " is required: the directory of a map written by build_map");
   }
+  const std::string layer = param<std::string>(pnh, "layer", mapLayerName(o.layer));
+  if (layer == "reflectivity") {
+    o.layer = MapLayer::kReflectivity;
+  } else if (layer != "height") {
+    throw ConfigError("parameter " + pnh.resolveName("layer") + " = '" + layer +
+                      "' must be height or reflectivity");
+  }
   o.map_frame = param<std::string>(pnh, "map_frame", o.map_frame);
   o.base_frame = param<std::string>(pnh, "base_frame", o.base_frame);
   if (o.map_frame.empty() || o.base_frame.empty()) {

@@ -1,6 +1,8 @@
 // The map server's load_map decision (map_server_load.h, what the service answers): a directory
 // whose tiles are truncated or CRC-broken is refused, naming the tiles and the reasons, and the
-// served map stays; the same directory restored loads, with every tile read afresh.
+// served map stays; the same directory restored loads, with every tile read afresh. A map of
+// the other layer (height / reflectivity) is refused with the build_map option that makes the
+// one asked for.
 #include "gmm_localization/ros/map_server_load.h"
 
 #include <gtest/gtest.h>
@@ -8,6 +10,7 @@
 #include "../unit/support/test_map.h"
 #include "gmm_localization/core/map/map_format.h"
 #include "gmm_localization/core/map/map_store.h"
+#include "gmm_localization/core/mapping/map_builder.h"
 
 namespace gmm_localization {
 namespace node {
@@ -103,6 +106,69 @@ TEST_F(LoadMapTest, MissingDirectoryOrTileFileIsRefused) {
   EXPECT_FALSE(no_file.success);
   EXPECT_NE(no_file.message.find("tile (1, 1)"), std::string::npos) << no_file.message;
   expectStillServing();
+}
+
+/// A small reflectivity map: a flat road of asphalt with a painted stripe, seen from a vehicle
+/// at its centre.
+Status buildReflectivityMap(const std::string& directory) {
+  MapBuilderOptions o;
+  o.output_directory = directory;
+  o.overwrite = true;
+  o.geometry = testmap::geometry();
+  o.threads = 1;
+  o.spill_buffer_bytes = size_t{4} << 20;
+  o.layer = MapLayer::kReflectivity;
+  auto builder = MapBuilder::create(o);
+  if (!builder) return Status::failure(builder.error());
+  PointBatch batch;
+  batch.has_vehicle_origin = true;
+  batch.vehicle_origin_m = Eigen::Vector3d(10.0, 5.0, 0.0);
+  for (float x = 0.f; x < 20.f; x += 0.05f) {
+    for (float y = 0.f; y < 10.f; y += 0.05f) {
+      batch.points_m.emplace_back(x, y, 0.f);
+      batch.intensity.push_back(std::abs(y - 5.f) < 0.1f ? 110.f : 11.f);
+    }
+  }
+  if (Status s = (*builder)->addBatch(batch); !s) return s;
+  auto stats = (*builder)->finish();
+  return stats ? Status::success() : Status::failure(stats.error());
+}
+
+TEST_F(LoadMapTest, AMapOfTheOtherLayerIsRefusedNamingTheBuildMapOption) {
+  const std::string reflectivity = testmap::tempDirectory("load_reflectivity");
+  ASSERT_TRUE(buildReflectivityMap(reflectivity).ok());
+  auto height_store = MapStore::open(other_);
+  auto reflectivity_store = MapStore::open(reflectivity);
+  ASSERT_TRUE(height_store.ok() && reflectivity_store.ok());
+  EXPECT_EQ(layerProblem(*height_store, MapLayer::kHeight), "");
+  EXPECT_EQ(layerProblem(*reflectivity_store, MapLayer::kReflectivity), "");
+  const std::string no_layer = layerProblem(*height_store, MapLayer::kReflectivity);
+  EXPECT_NE(no_layer.find("build_map --layer reflectivity"), std::string::npos) << no_layer;
+  EXPECT_NE(no_layer.find(other_), std::string::npos) << no_layer;
+  EXPECT_NE(layerProblem(*reflectivity_store, MapLayer::kHeight).find("method:=reflectivity"),
+            std::string::npos);
+
+  // load_map: a height map asked for as reflectivity, and the reverse, keep the served map.
+  const LoadMapOutcome wrong = loadMapDirectory(*engine_, other_, 5, MapLayer::kReflectivity);
+  EXPECT_FALSE(wrong.success);
+  EXPECT_NE(wrong.message.find("holds the height layer"), std::string::npos) << wrong.message;
+  const LoadMapOutcome reverse = loadMapDirectory(*engine_, reflectivity);
+  EXPECT_FALSE(reverse.success);
+  EXPECT_NE(reverse.message.find("holds the reflectivity layer"), std::string::npos)
+      << reverse.message;
+  expectStillServing();
+  // A missing MAP/reflectivity says how to build it.
+  const LoadMapOutcome missing =
+      loadMapDirectory(*engine_, other_ + "/reflectivity", 5, MapLayer::kReflectivity);
+  EXPECT_FALSE(missing.success);
+  EXPECT_NE(
+      missing.message.find("build_map --layer reflectivity --output " + other_ + "/reflectivity"),
+      std::string::npos)
+      << missing.message;
+  // The right layer loads.
+  EXPECT_TRUE(loadMapDirectory(*engine_, reflectivity, 5, MapLayer::kReflectivity).success);
+  engine_.reset();
+  testmap::removeDirectory(reflectivity);
 }
 
 }  // namespace

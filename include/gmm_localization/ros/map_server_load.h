@@ -8,6 +8,8 @@
 #include <cstddef>
 #include <string>
 
+#include "gmm_localization/core/map/map_store.h"
+#include "gmm_localization/core/map/reflectivity_layer.h"
 #include "gmm_localization/core/raster/chunk_engine.h"
 
 namespace gmm_localization {
@@ -18,10 +20,19 @@ struct LoadMapOutcome {
   std::string message;  ///< what is served now, or why the map was kept
 };
 
-/// Checks `directory` and switches `engine` to it; on failure names at most max_listed bad
-/// tiles (with their reasons) and how many more there are.
+/// Empty when `store` holds the `wanted` layer, else why not and how to get it (the build_map
+/// option, the launch argument): a map server asked for the reflectivity layer of a map that
+/// has only its height layer must say so at start-up, not serve heights to a reflectivity
+/// matcher.
+std::string layerProblem(const MapStore& store, MapLayer wanted);
+/// What to add to a failure to open `directory` as the `wanted` layer (empty for height).
+std::string layerHint(const std::string& directory, MapLayer wanted);
+
+/// Checks `directory` (its tiles, and that it holds the `wanted` layer) and switches `engine`
+/// to it; on failure names at most max_listed bad tiles (with their reasons) and how many more
+/// there are.
 LoadMapOutcome loadMapDirectory(ChunkEngine& engine, const std::string& directory,
-                                size_t max_listed = 5);
+                                size_t max_listed = 5, MapLayer wanted = MapLayer::kHeight);
 
 }  // namespace node
 }  // namespace gmm_localization

@@ -7,6 +7,7 @@
 
 #include <ros/node_handle.h>
 
+#include "gmm_localization/core/map/reflectivity_layer.h"
 #include "gmm_localization/core/raster/chunk_engine.h"
 #include "gmm_localization/core/raster/chunk_planner.h"
 #include "gmm_localization/ros/params.h"
@@ -16,6 +17,9 @@ namespace node {
 
 struct MapServerOptions {
   std::string map_directory;  ///< required: a directory written by build_map
+  /// The layer the map must hold (`layer`: height or reflectivity); the server refuses to
+  /// start on, or load_map, a map of the other layer.
+  MapLayer layer = MapLayer::kHeight;
   std::string map_frame = "map";
   std::string base_frame = "base_link";
   /// Radii, hysteresis, raster options and worker threads (core/raster/chunk_engine.h).
