@@ -149,7 +149,9 @@ void LocalizerPipeline::startNext(double now) {
   r.match = processor_.process(map_ ? *map_ : kEmpty, std::move(w.scan), m.prior, m.twistOrNull(),
                                options_.record_traversal, options_.clock);
   double latency = w.latency_s >= 0.0 ? w.latency_s : r.match.total_s;
-  if (m.global() && options_.global_search_latency_s >= 0.0) {
+  if (m.global() && options_.global_search_latency_measured) {
+    latency = r.match.total_s;
+  } else if (m.global() && options_.global_search_latency_s >= 0.0) {
     latency = options_.global_search_latency_s;
   }
   r.finish_s = start_s + std::max(0.0, latency);

@@ -280,6 +280,8 @@ Result<EvaluationResults> runBagEvaluation(const BagEvaluationConfig& c, std::os
   po.scan_arrival_delay_s =
       c.arrival_delay_s >= 0.0 ? c.arrival_delay_s : medianScanRecordDelay(c.bag, c.topics.cloud);
   po.clock = steadySeconds;
+  po.global_search_latency_s = c.global_latency_s;
+  po.global_search_latency_measured = c.global_latency_s < 0.0;
   auto pipeline = LocalizerPipeline::create(po);
   if (!pipeline) return R::failure(pipeline.error());
 
@@ -325,7 +327,9 @@ Result<EvaluationResults> runBagEvaluation(const BagEvaluationConfig& c, std::os
   }
   log << "localizing (" << (c.latency_s >= 0 ? "fixed" : "measured") << " match latency";
   if (c.latency_s >= 0) log << " " << c.latency_s << " s";
-  log << ", scans arrive " << po.scan_arrival_delay_s << " s after their stamp) ..." << std::endl;
+  log << ", scans arrive " << po.scan_arrival_delay_s << " s after their stamp, global searches "
+      << (c.global_latency_s >= 0 ? std::to_string(c.global_latency_s) + " s" : "measured")
+      << ") ..." << std::endl;
   const double t0 = steadySeconds();
   auto stats = visitLocalizationBag(c.bag, c.topics, v);
   if (!stats) return R::failure(stats.error());

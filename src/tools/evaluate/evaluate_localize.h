@@ -27,6 +27,10 @@ struct BagEvaluationConfig {
   std::string dataset = "downtown";
   /// Match processing time on the virtual clock [s]; < 0: the measured time (not deterministic).
   double latency_s = 0.1;
+  /// A global search's time on the virtual clock [s]; < 0: its measured wall time, as on the
+  /// vehicle (the global worker; the scans meanwhile are skipped or searched in the interim
+  /// window). A fixed short time would start a global search at nearly every scan while lost.
+  double global_latency_s = -1.0;
   /// Scan arrival after its stamp [s]; < 0: the bag's median record delay.
   double arrival_delay_s = -1.0;
   double ekf_rate_hz = 20.0;  ///< EKF output sampling rate for the error series [Hz]

@@ -44,6 +44,8 @@ Mode A, read a localization bag directly (deterministic, faster than real time):
     --ekf-param K=V         override an ekf.yaml key, repeatable
     --latency S             virtual match processing time [s], or 'measured' [0.1]
     --arrival-delay S       scan arrival after its stamp [s], or 'auto' (bag record delay) [auto]
+    --global-latency S      a global search's virtual time [s], or 'measured' (its wall time,
+                            as in the matcher's global worker) [measured]
     --initial-offset DX,DY,DYAW_DEG   initial pose = truth at the first scan + this [2,-1.5,2]
     --ekf-rate HZ           EKF error sampling rate [20]
     --raster-radius M       map chunks within this of the route [100]
@@ -143,6 +145,8 @@ EvaluateCommand parseEvaluateCommand(int argc, char** argv, const std::string& d
       b.ekf_overrides.push_back(v);
     } else if (bag && key == "--latency") {
       b.latency_s = v == "measured" ? -1.0 : toDouble(key, v);
+    } else if (bag && key == "--global-latency") {
+      b.global_latency_s = v == "measured" ? -1.0 : toDouble(key, v);
     } else if (bag && key == "--arrival-delay") {
       b.arrival_delay_s = v == "auto" ? -1.0 : toDouble(key, v);
     } else if (bag && key == "--initial-offset") {

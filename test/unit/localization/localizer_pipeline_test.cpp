@@ -343,6 +343,40 @@ TEST_F(LocalizerPipelineTest, TheGlobalSearchRunsBesideTheWorkerAndTheScansMeanw
   EXPECT_EQ(p.tracker().mode(), PriorMode::kTracking);
 }
 
+TEST_F(LocalizerPipelineTest, AMeasuredGlobalSearchTakesItsOwnTimeOnTheVirtualClock) {
+  // As above, with global_search_latency_measured and a clock that advances 0.2 s at each
+  // reading: the global search's finish is its start plus its own measured time, not the
+  // fixed 1.9 s nor the scan's latency.
+  LocalizerPipelineOptions o = options();
+  o.policy.window.global_max_half_xy_m = 20.0;
+  o.global_search_latency_s = 1.9;
+  o.global_search_latency_measured = true;
+  auto ticks = std::make_shared<double>(0.0);
+  o.clock = [ticks]() { return *ticks += 0.2; };
+  auto created = LocalizerPipeline::create(o);
+  ASSERT_TRUE(created.ok()) << created.error();
+  LocalizerPipeline& p = created.value();
+  p.setMap(map_);
+  p.setConfiguredPose(offsetPose(truth(0.05), 0.5, 0.5, 0.0), true);
+  drive(p, kT0, 0.1, [](int k) {
+    if (k < 3 || k > 6) return scanAt(k);
+    PointList sky;
+    for (double x = -20; x <= 20; x += 0.5) {
+      for (double y = -20; y <= 20; y += 0.5) sky.emplace_back(x, y, 25.0f);
+    }
+    return sky;
+  });
+  int global = 0;
+  for (const auto& r : p.takeReports()) {
+    if (!r.match.prior.lost || r.match.outcome == MatchOutcome::kSkipped) continue;
+    ++global;
+    EXPECT_GT(r.match.total_s, 0.0);
+    EXPECT_NEAR(r.finish_s - r.start_s, r.match.total_s, 1e-9);
+    EXPECT_GT(std::abs(r.finish_s - r.start_s - 1.9), 0.01);
+  }
+  EXPECT_GE(global, 1);
+}
+
 TEST_F(LocalizerPipelineTest, RecoversWhenTimeGoesBackwards) {
   auto created = LocalizerPipeline::create(options());
   ASSERT_TRUE(created.ok());

@@ -53,6 +53,9 @@ struct LocalizerPipelineOptions {
   /// its scan's latency [s]; the global search takes seconds where a tracking match takes
   /// tens of milliseconds.
   double global_search_latency_s = -1.0;
+  /// A global search takes its own measured time (MatchReport::total_s; needs `clock`), as it
+  /// does on the vehicle, instead of a fixed one; overrides global_search_latency_s.
+  bool global_search_latency_measured = false;
   bool record_traversal = false;  ///< keep each search's traversal in its report
   /// Optional clock [s] for the timings and for measured latencies (negative latency).
   std::function<double()> clock;
