@@ -51,8 +51,10 @@ def load(directory):
     return {
         "dir": directory,
         "summary": summary,
-        "label": "%s (%s%s)" % (summary["dataset"], "replay" if summary["mode"] == "recorded" else "offline",
-                                ", %s world" % summary["world"] if summary.get("world") else ""),
+        "label": "%s (%s%s%s)" % (
+            summary["dataset"], "replay" if summary["mode"] == "recorded" else "offline",
+            ", %s world" % summary["world"] if summary.get("world") else "",
+            ", %s method" % summary["method"] if summary.get("method", "height") != "height" else ""),
         "ekf": read_csv(os.path.join(directory, "ekf.csv")),
         "matches": read_csv(os.path.join(directory, "matches.csv")),
         "offsets": read_csv(os.path.join(directory, "offsets.csv")),
@@ -282,6 +284,8 @@ def table1(runs, path):
         for kind, kind_name in kinds:
             if not any(s.get(kind) for s in by_ds.values()):
                 continue  # the map-frame rows only with evaluate --map-poses
+            if kind == "map_error" and method != "height":
+                continue  # the same map poses: printed once, with the height method
             cells = []
             for ds in datasets:
                 s = by_ds.get(ds)
