@@ -4,36 +4,39 @@
 #include <map>
 
 #include "evaluate/evaluate_results.h"
+#include "gmm_localization/core/common/types.h"
 #include "gmm_localization/core/mapping/kitti_source.h"
 
 namespace gmm_localization {
 namespace eval {
 namespace {
 
-Eigen::Isometry3d toIsometry(const PoseStamped2& p) {
-  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
-  t.linear() = (Eigen::AngleAxisd(p.yaw, Eigen::Vector3d::UnitZ()) *
-                Eigen::AngleAxisd(p.pitch, Eigen::Vector3d::UnitY()) *
-                Eigen::AngleAxisd(p.roll, Eigen::Vector3d::UnitX()))
-                   .toRotationMatrix();
-  t.translation() = Eigen::Vector3d(p.x, p.y, p.z);
-  return t;
+/// The pose as a Pose6 isometry (core/common/types.h: R = Rz(yaw) Ry(pitch) Rx(roll)).
+Eigen::Isometry3d isometryOf(const PoseStamped2& p) {
+  Pose6 q;
+  q.x = p.x;
+  q.y = p.y;
+  q.z = p.z;
+  q.roll = p.roll;
+  q.pitch = p.pitch;
+  q.yaw = p.yaw;
+  return toIsometry(q);
 }
 
-PoseStamped2 fromIsometry(const Eigen::Isometry3d& t, double stamp) {
-  const Eigen::Matrix3d r = t.linear();
+PoseStamped2 poseOf(const Eigen::Isometry3d& t, double stamp) {
+  const Pose6 q = fromIsometry(t);
   PoseStamped2 p;
   p.t = stamp;
-  p.x = t.translation().x();
-  p.y = t.translation().y();
-  p.z = t.translation().z();
-  p.yaw = std::atan2(r(1, 0), r(0, 0));
-  p.pitch = std::asin(std::clamp(-r(2, 0), -1.0, 1.0));
-  p.roll = std::atan2(r(2, 1), r(2, 2));
+  p.x = q.x;
+  p.y = q.y;
+  p.z = q.z;
+  p.roll = q.roll;
+  p.pitch = q.pitch;
+  p.yaw = q.yaw;
   return p;
 }
 
-Result<std::vector<Eigen::Isometry3d>> readPoses(const std::string& path) {
+Result<std::vector<Eigen::Isometry3d>> readPoseList(const std::string& path) {
   auto poses = readKittiPoses(path);
   if (!poses) return Result<std::vector<Eigen::Isometry3d>>::failure(poses.error());
   std::vector<Eigen::Isometry3d> out;
@@ -53,9 +56,9 @@ Result<std::vector<Eigen::Isometry3d>> readPoses(const std::string& path) {
 Result<MapFrame> MapFrame::load(const std::string& directory) {
   const std::string map_path = directory + "/poses.txt";
   const std::string truth_path = directory + "/poses_truth.txt";
-  auto map_poses = readPoses(map_path);
+  auto map_poses = readPoseList(map_path);
   if (!map_poses) return Result<MapFrame>::failure("--map-poses: " + map_poses.error());
-  auto true_poses = readPoses(truth_path);
+  auto true_poses = readPoseList(truth_path);
   if (!true_poses) {
     return Result<MapFrame>::failure("--map-poses: " + true_poses.error() +
                                      " (simulate --map-pose-error writes it beside poses.txt)");
@@ -102,7 +105,7 @@ std::optional<PoseStamped2> MapFrame::toMapFrame(const PoseStamped2& truth) cons
   if (rot.norm() > 0.0)
     e.linear() = Eigen::AngleAxisd(rot.norm(), rot.normalized()).toRotationMatrix();
   e.translation() = trans;
-  return fromIsometry(e * toIsometry(truth), truth.t);
+  return poseOf(e * isometryOf(truth), truth.t);
 }
 
 void applyMapFrame(const MapFrame& frame, EvaluationResults& results) {

@@ -5,9 +5,7 @@
 
 namespace gmm_localization {
 namespace tools {
-namespace {
-
-Result<double> number(const std::string& opt, const std::string& v) {
+Result<double> parseOptionNumber(const std::string& opt, const std::string& v) {
   char* end = nullptr;
   const double d = std::strtod(v.c_str(), &end);
   if (v.empty() || *end != '\0' || !std::isfinite(d))
@@ -15,11 +13,13 @@ Result<double> number(const std::string& opt, const std::string& v) {
   return d;
 }
 
+namespace {
+
 /// "MIN,MAX" with MIN <= MAX.
 Status range(const std::string& opt, const std::string& v, double* lo, double* hi) {
   const size_t comma = v.find(',');
-  auto a = number(opt, v.substr(0, comma));
-  auto b = number(opt, comma == std::string::npos ? "" : v.substr(comma + 1));
+  auto a = parseOptionNumber(opt, v.substr(0, comma));
+  auto b = parseOptionNumber(opt, comma == std::string::npos ? "" : v.substr(comma + 1));
   if (!a || !b || *a > *b)
     return Status::failure("option " + opt + ": expected MIN,MAX with MIN <= MAX, got '" + v + "'");
   *lo = *a;
@@ -28,7 +28,7 @@ Status range(const std::string& opt, const std::string& v, double* lo, double* h
 }
 
 Result<uint64_t> seed(const std::string& opt, const std::string& v) {
-  auto d = number(opt, v);
+  auto d = parseOptionNumber(opt, v);
   if (!d) return Result<uint64_t>::failure(d.error());
   if (*d < 0.0 || *d != std::floor(*d))
     return Result<uint64_t>::failure("option " + opt + ": '" + v + "' is not a seed (>= 0)");
@@ -86,7 +86,7 @@ Result<bool> applyImperfectionOption(const std::string& name, const std::string&
                        : name == "--aging-repaved-per-km"    ? &a.repaved_per_km
                                                              : nullptr;
       if (target == nullptr) return false;
-      auto d = number(name, v);
+      auto d = parseOptionNumber(name, v);
       if (!d) return R::failure(d.error());
       *target = *d;
     }

@@ -11,6 +11,10 @@
 namespace gmm_localization {
 namespace tools {
 
+/// The option's value as a finite number, or a failure naming the option (every numeric
+/// option of `simulate` is read by it).
+Result<double> parseOptionNumber(const std::string& opt, const std::string& v);
+
 /// Which of the options were given (a numeric override without its mode is refused).
 struct ImperfectionFlags {
   std::string extrinsic_override;  ///< the last --extrinsic-error-* option given, if any

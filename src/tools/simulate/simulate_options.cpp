@@ -6,18 +6,12 @@
 #include <map>
 #include <sstream>
 
+#include "simulate/simulate_imperfection_options.h"
+
 namespace gmm_localization {
 namespace tools {
 
 namespace {
-
-Result<double> number(const std::string& opt, const std::string& v) {
-  char* end = nullptr;
-  const double d = std::strtod(v.c_str(), &end);
-  if (v.empty() || *end != '\0' || !std::isfinite(d))
-    return Result<double>::failure("option " + opt + ": '" + v + "' is not a number");
-  return d;
-}
 
 Result<std::vector<sim::GridNode>> parseRoute(const std::string& v) {
   std::vector<sim::GridNode> nodes;
@@ -351,8 +345,8 @@ Result<SimulateOptions> parseSimulateOptions(int argc, char** argv) {
     }
     if (a == "--snow-depth") {
       const size_t comma = v.find(',');
-      auto lo = number(a, v.substr(0, comma));
-      auto hi = number(a, comma == std::string::npos ? "" : v.substr(comma + 1));
+      auto lo = parseOptionNumber(a, v.substr(0, comma));
+      auto hi = parseOptionNumber(a, comma == std::string::npos ? "" : v.substr(comma + 1));
       if (!lo || !hi)
         return R::failure("option --snow-depth: expected MIN,MAX in metres, got '" + v + "'");
       c.pass.snow_depth_min_m = *lo;
@@ -361,7 +355,7 @@ Result<SimulateOptions> parseSimulateOptions(int argc, char** argv) {
     }
     auto it = num.find(a);
     if (it == num.end()) return R::failure("unknown option " + a + " (see --help)");
-    auto d = number(a, v);
+    auto d = parseOptionNumber(a, v);
     if (!d) return R::failure(d.error());
     const Status s = it->second(*d);
     if (!s) return R::failure(s.error());

@@ -67,6 +67,15 @@ class LocalizerPipelineTest : public ::testing::Test {
     o.yaw = b.yaw + 0.1 * M_PI / 180.0;
     return toIsometry(o);
   }
+  /// Scans 3..6 see only a flat sheet 25 m up (nothing the map explains), the others the street.
+  static PointList scanOrSkyAt(int k) {
+    if (k < 3 || k > 6) return scanAt(k);
+    PointList sky;
+    for (double x = -20; x <= 20; x += 0.5) {
+      for (double y = -20; y <= 20; y += 0.5) sky.emplace_back(x, y, 25.0f);
+    }
+    return sky;
+  }
   static const PointList& scanAt(int k) {
     auto it = scans_.find(k);
     if (it == scans_.end()) {
@@ -251,14 +260,7 @@ TEST_F(LocalizerPipelineTest, WidensAfterRejectedMatchesAndRecovers) {
   p.setMap(map_);
   p.setConfiguredPose(offsetPose(truth(0.05), 0.5, 0.5, 0.0), true);
   // Scans 3..6 see only things the map cannot explain (a flat sheet 25 m up): rejected.
-  drive(p, kT0, 0.1, [](int k) {
-    if (k < 3 || k > 6) return scanAt(k);
-    PointList sky;
-    for (double x = -20; x <= 20; x += 0.5) {
-      for (double y = -20; y <= 20; y += 0.5) sky.emplace_back(x, y, 25.0f);
-    }
-    return sky;
-  });
+  drive(p, kT0, 0.1, scanOrSkyAt);
   const auto reports = p.takeReports();
   ASSERT_EQ(reports.size(), 12u);
   for (int k = 0; k < 12; ++k) {
@@ -294,14 +296,7 @@ TEST_F(LocalizerPipelineTest, TheGlobalSearchRunsBesideTheWorkerAndTheScansMeanw
   LocalizerPipeline& p = created.value();
   p.setMap(map_);
   p.setConfiguredPose(offsetPose(truth(0.05), 0.5, 0.5, 0.0), true);
-  drive(p, kT0, 0.1, [](int k) {
-    if (k < 3 || k > 6) return scanAt(k);
-    PointList sky;
-    for (double x = -20; x <= 20; x += 0.5) {
-      for (double y = -20; y <= 20; y += 0.5) sky.emplace_back(x, y, 25.0f);
-    }
-    return sky;
-  });
+  drive(p, kT0, 0.1, scanOrSkyAt);
   const auto reports = p.takeReports();
   ASSERT_EQ(reports.size(), 12u);
   EXPECT_EQ(p.droppedScans(), 0u);
@@ -358,14 +353,7 @@ TEST_F(LocalizerPipelineTest, AMeasuredGlobalSearchTakesItsOwnTimeOnTheVirtualCl
   LocalizerPipeline& p = created.value();
   p.setMap(map_);
   p.setConfiguredPose(offsetPose(truth(0.05), 0.5, 0.5, 0.0), true);
-  drive(p, kT0, 0.1, [](int k) {
-    if (k < 3 || k > 6) return scanAt(k);
-    PointList sky;
-    for (double x = -20; x <= 20; x += 0.5) {
-      for (double y = -20; y <= 20; y += 0.5) sky.emplace_back(x, y, 25.0f);
-    }
-    return sky;
-  });
+  drive(p, kT0, 0.1, scanOrSkyAt);
   int global = 0;
   for (const auto& r : p.takeReports()) {
     if (!r.match.prior.lost || r.match.outcome == MatchOutcome::kSkipped) continue;

@@ -38,8 +38,11 @@ double roadIntensity(const CellIndex& c, const MapGeometry& g) {
   if (std::abs(p.y()) < 0.1 && std::fmod(std::abs(p.x()) + 100.0, 9.0) < 3.0) i = 110.0;
   if (std::abs(std::abs(p.y()) - 3.5) < 0.1) i = 100.0;
   if (std::abs(p.x() - 14.0) < 2.0 && std::fmod(std::abs(p.y()) + 100.0, 1.0) < 0.5) i = 105.0;
-  const uint64_t patch = mix(static_cast<uint64_t>(std::floor(p.x() / 4.0)) * 31ull ^
-                             static_cast<uint64_t>(std::floor(p.y() / 4.0)) * 17ull);
+  // Through int64_t: a negative double converted to an unsigned type is undefined.
+  const auto block = [](double v) {
+    return static_cast<uint64_t>(static_cast<int64_t>(std::floor(v / 4.0)));
+  };
+  const uint64_t patch = mix(block(p.x()) * 31ull ^ block(p.y()) * 17ull);
   if (patch % 7 == 0) i -= 5.0;
   return i;
 }
