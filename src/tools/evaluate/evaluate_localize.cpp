@@ -22,29 +22,6 @@ double steadySeconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
-Pose6 toPose6(const PoseStamped2& p) {
-  Pose6 o;
-  o.x = p.x;
-  o.y = p.y;
-  o.z = p.z;
-  o.roll = p.roll;
-  o.pitch = p.pitch;
-  o.yaw = p.yaw;
-  return o;
-}
-
-PoseStamped2 planar(const Pose6& p, double t) {
-  PoseStamped2 o;
-  o.t = t;
-  o.x = p.x;
-  o.y = p.y;
-  o.z = p.z;
-  o.yaw = p.yaw;
-  o.roll = p.roll;
-  o.pitch = p.pitch;
-  return o;
-}
-
 /// Feeds the bag's messages to the pipeline and turns what comes out into rows.
 class BagRun {
  public:

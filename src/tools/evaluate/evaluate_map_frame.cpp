@@ -11,31 +11,6 @@ namespace gmm_localization {
 namespace eval {
 namespace {
 
-/// The pose as a Pose6 isometry (core/common/types.h: R = Rz(yaw) Ry(pitch) Rx(roll)).
-Eigen::Isometry3d isometryOf(const PoseStamped2& p) {
-  Pose6 q;
-  q.x = p.x;
-  q.y = p.y;
-  q.z = p.z;
-  q.roll = p.roll;
-  q.pitch = p.pitch;
-  q.yaw = p.yaw;
-  return toIsometry(q);
-}
-
-PoseStamped2 poseOf(const Eigen::Isometry3d& t, double stamp) {
-  const Pose6 q = fromIsometry(t);
-  PoseStamped2 p;
-  p.t = stamp;
-  p.x = q.x;
-  p.y = q.y;
-  p.z = q.z;
-  p.roll = q.roll;
-  p.pitch = q.pitch;
-  p.yaw = q.yaw;
-  return p;
-}
-
 Result<std::vector<Eigen::Isometry3d>> readPoseList(const std::string& path) {
   auto poses = readKittiPoses(path);
   if (!poses) return Result<std::vector<Eigen::Isometry3d>>::failure(poses.error());
@@ -105,7 +80,7 @@ std::optional<PoseStamped2> MapFrame::toMapFrame(const PoseStamped2& truth) cons
   if (rot.norm() > 0.0)
     e.linear() = Eigen::AngleAxisd(rot.norm(), rot.normalized()).toRotationMatrix();
   e.translation() = trans;
-  return poseOf(e * isometryOf(truth), truth.t);
+  return planar(fromIsometry(e * toIsometry(toPose6(truth))), truth.t);
 }
 
 void applyMapFrame(const MapFrame& frame, EvaluationResults& results) {

@@ -7,6 +7,29 @@
 namespace gmm_localization {
 namespace eval {
 
+Pose6 toPose6(const PoseStamped2& p) {
+  Pose6 o;
+  o.x = p.x;
+  o.y = p.y;
+  o.z = p.z;
+  o.roll = p.roll;
+  o.pitch = p.pitch;
+  o.yaw = p.yaw;
+  return o;
+}
+
+PoseStamped2 planar(const Pose6& p, double t) {
+  PoseStamped2 o;
+  o.t = t;
+  o.x = p.x;
+  o.y = p.y;
+  o.z = p.z;
+  o.yaw = p.yaw;
+  o.roll = p.roll;
+  o.pitch = p.pitch;
+  return o;
+}
+
 bool Trajectory::add(const PoseStamped2& p) {
   if (!std::isfinite(p.t) || (!samples_.empty() && p.t <= samples_.back().t)) return false;
   samples_.push_back(p);

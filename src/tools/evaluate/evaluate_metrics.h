@@ -14,6 +14,8 @@
 #include <optional>
 #include <vector>
 
+#include "gmm_localization/core/common/types.h"
+
 namespace gmm_localization {
 namespace eval {
 
@@ -44,6 +46,10 @@ class Trajectory {
  private:
   std::vector<PoseStamped2> samples_;
 };
+
+/// The same pose as a Pose6 (core/common/types.h), and back with a stamp.
+Pose6 toPose6(const PoseStamped2& p);
+PoseStamped2 planar(const Pose6& p, double t);
 
 /// Angle wrapped to (-pi, pi].
 double wrapAngle(double a);
