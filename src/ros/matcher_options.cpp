@@ -160,13 +160,12 @@ LocalizationPolicyOptions loadLocalizationPolicyOptions(const ParamSource& nh) {
 
 MatchMethodOptions loadMatchMethodOptions(const ParamSource& pnh) {
   MatchMethodOptions o;
-  const std::string method = param<std::string>(pnh, "method", mapLayerName(o.layer));
-  if (method == "reflectivity") {
-    o.layer = MapLayer::kReflectivity;
-  } else if (method != "height") {
+  const std::string method = param<std::string>(pnh, "method", matchMethodName(o.method));
+  if (!parseMatchMethod(method, &o.method)) {
     throw ConfigError("parameter " + pnh.resolveName("method") + " = '" + method +
-                      "' must be height (the paper's) or reflectivity (the baseline; the map "
-                      "server must serve the map's reflectivity layer)");
+                      "' must be height (the paper's), reflectivity (the baseline; the map "
+                      "server must serve the map's reflectivity layer) or fused (both summed; "
+                      "evaluate --method fused only)");
   }
   ReflectivityLayerOptions& r = o.reflectivity;
   r.metres_per_unit = param(pnh, "reflectivity/metres_per_unit", r.metres_per_unit, 1e-4, 1.0);

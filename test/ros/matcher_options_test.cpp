@@ -22,6 +22,7 @@ TEST(MatcherOptions, PipelineOptionsMirrorTheNodeletOptions) {
   m.session.scan_queue_size = 5;
   m.initial_pose_half_xy_m = 4.0;
   m.initial_pose_half_heading_rad = 0.2;
+  m.method.method = MatchMethod::kFused;
   EkfNodeOptions e;
   e.ekf.history_length_s = 3.0;
   e.filter.gate_lockout_count = 9;
@@ -39,6 +40,8 @@ TEST(MatcherOptions, PipelineOptionsMirrorTheNodeletOptions) {
   EXPECT_FALSE(o.session.configured_pose_on_reset);
   // The scan queue too: the pipeline models the nodelet's queue, not a single slot.
   EXPECT_EQ(o.session.scan_queue_size, 5);
+  // The method: `evaluate --method fused` runs the nodelets' options with method: fused.
+  EXPECT_EQ(o.method.method, MatchMethod::kFused);
   EXPECT_EQ(o.ekf.history_length_s, 3.0);
   EXPECT_EQ(o.filter.gate_lockout_count, 9);
   EXPECT_EQ(o.filter.defaults.twist_linear_sigma_mps, 0.3);

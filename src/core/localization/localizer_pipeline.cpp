@@ -147,7 +147,7 @@ void LocalizerPipeline::startNext(double now) {
   }
   static const ChunkMap kEmpty;
   r.match = processor_.process(map_ ? *map_ : kEmpty, std::move(w.scan), m.prior, m.twistOrNull(),
-                               options_.record_traversal, options_.clock);
+                               options_.record_traversal, options_.clock, reflectivity_map_.get());
   double latency = w.latency_s >= 0.0 ? w.latency_s : r.match.total_s;
   if (m.global() && options_.global_search_latency_measured) {
     latency = r.match.total_s;

@@ -24,6 +24,27 @@ const char* matchOutcomeName(MatchOutcome outcome) {
   }
 }
 
+const char* matchMethodName(MatchMethod method) {
+  switch (method) {
+    case MatchMethod::kReflectivity:
+      return "reflectivity";
+    case MatchMethod::kFused:
+      return "fused";
+    default:
+      return "height";
+  }
+}
+
+bool parseMatchMethod(const std::string& name, MatchMethod* out) {
+  for (MatchMethod m : {MatchMethod::kHeight, MatchMethod::kReflectivity, MatchMethod::kFused}) {
+    if (name == matchMethodName(m)) {
+      *out = m;
+      return true;
+    }
+  }
+  return false;
+}
+
 std::string MatchMethodOptions::validate() const {
   const ReflectivityLayerOptions& r = reflectivity;
   if (!(r.metres_per_unit > 0.0 && r.metres_per_unit <= 1.0))
@@ -54,7 +75,8 @@ Result<MatchProcessor> MatchProcessor::create(const RegistrationOptions& registr
 
 MatchReport MatchProcessor::process(const ChunkMap& map, ScanInput scan, const Prior& prior,
                                     const BodyTwist* twist, bool want_traversal,
-                                    const std::function<double()>& now) const {
+                                    const std::function<double()>& now,
+                                    const ChunkMap* reflectivity_map) const {
   const double t0 = now ? now() : 0.0;
   MatchReport r;
   r.stamp_s = scan.stamp_s;
@@ -113,17 +135,32 @@ MatchReport MatchProcessor::process(const ChunkMap& map, ScanInput scan, const P
   request.half_heading_rad = r.window.half_heading_rad;
   request.has_reference = scan.has_reference;
   request.reference = scan.reference;
-  // The reflectivity layer: levelled ground returns with their intensity as z (x, y, heading).
-  const bool reflectivity = method_.layer == MapLayer::kReflectivity;
+  // The reflectivity layer: levelled ground returns with their intensity as z (x, y, heading);
+  // the fused method: those returns as the second channel of the height match.
+  const bool reflectivity = method_.method == MatchMethod::kReflectivity;
+  const bool fused = method_.method == MatchMethod::kFused;
   PointList reflectivity_points;
-  if (reflectivity) {
+  FusedChannel fused_channel;
+  if (method_.needsIntensity()) {
     if (scan.intensity.size() != scan.points.size()) {
+      return finish(MatchOutcome::kSkipped, std::string("the cloud has no intensity field: the ") +
+                                                matchMethodName(method_.method) +
+                                                " method needs one");
+    }
+    if (fused && reflectivity_map == nullptr) {
       return finish(MatchOutcome::kSkipped,
-                    "the cloud has no intensity field: the reflectivity method needs one");
+                    "no reflectivity map: the fused method needs the map's reflectivity layer");
     }
     reflectivity_points = reflectivityPoints(scan.points, scan.intensity, prior.pose.roll,
                                              prior.pose.pitch, method_.reflectivity);
+  }
+  if (reflectivity) {
     for (Pose6* p : {&request.prior, &request.reference}) p->z = p->roll = p->pitch = 0.0;
+  }
+  if (fused) {
+    fused_channel.map = reflectivity_map;
+    fused_channel.points = std::move(reflectivity_points);
+    request.fused = &fused_channel;
   }
   const Registration& registration =
       reflectivity ? reflectivity_ : (prior.z_known ? tracking_ : unknown_z_);

@@ -116,23 +116,22 @@ std::string GlobalSearchOptions::validate() const {
   return {};
 }
 
-int64_t headingIntervalBound(const SearchProblem& problem, int j0, int heading_level, int layer,
+namespace {
+
+/// headingIntervalBound's sum over one channel's points (global_search.h; the channels' bounds
+/// add up, search_problem.h), for headings [j0, j1] around jm.
+int64_t channelIntervalBound(const SearchProblem& problem, int channel, int j0, int j1, int layer,
                              int tx, int ty, int64_t* lookups, int max_reads_per_point) {
   const SearchWindow& w = problem.window();
   const int max_layer = problem.map().options().num_layers;
-  const int j1 = std::min(j0 + (1 << heading_level), w.sizeH()) - 1;
-  const std::vector<CellPoint>& pts = problem.points(j0 + (j1 - j0) / 2);
-  if (j0 == j1 && layer <= max_layer) {
-    if (lookups != nullptr) *lookups += static_cast<int64_t>(pts.size());
-    return problem.score(j0, layer, tx, ty);
-  }
   const int jm = j0 + (j1 - j0) / 2;
+  const std::vector<CellPoint>& pts = problem.points(jm, channel);
   const double delta = std::max(jm - j0, j1 - jm) * w.heading_step_rad;
   // Per-axis reach of a rotation by at most delta (global_search.h): |cos a - 1| <= 1 - cos delta
   // for delta <= pi, |sin a| <= sin delta for delta <= pi / 2 (else 1, and 2 for the cosine).
   const double cos_reach = delta < M_PI ? 1.0 - std::cos(delta) : 2.0;
   const double sin_reach = delta < M_PI / 2 ? std::sin(delta) : 1.0;
-  const RasterWindow& raster = problem.raster();
+  const RasterWindow& raster = problem.raster(channel);
   const PriorCell prior = priorCell(problem);
   const int64_t block = int64_t{1} << layer;
   const int max_reads = std::max(1, max_reads_per_point);
@@ -207,6 +206,23 @@ int64_t headingIntervalBound(const SearchProblem& problem, int j0, int heading_l
     sum += static_cast<int64_t>(pts[pi].count) * point_max[pi];
   }
   if (lookups != nullptr) *lookups += reads;
+  return sum;
+}
+
+}  // namespace
+
+int64_t headingIntervalBound(const SearchProblem& problem, int j0, int heading_level, int layer,
+                             int tx, int ty, int64_t* lookups, int max_reads_per_point) {
+  const int max_layer = problem.map().options().num_layers;
+  const int j1 = std::min(j0 + (1 << heading_level), problem.window().sizeH()) - 1;
+  if (j0 == j1 && layer <= max_layer) {
+    if (lookups != nullptr) *lookups += problem.preparedPoints(j0);
+    return problem.score(j0, layer, tx, ty);
+  }
+  int64_t sum = 0;
+  for (int c = 0; c < problem.numChannels(); ++c) {
+    sum += channelIntervalBound(problem, c, j0, j1, layer, tx, ty, lookups, max_reads_per_point);
+  }
   return sum;
 }
 

@@ -46,8 +46,8 @@ double& coord(Pose6& p, int a) {
 }  // namespace
 
 /// One pattern search from `start`, constrained to the box around `centre`.
-HillClimbOutcome climb(const ExactScorer& scorer, const PointList& base_points, const Pose6& start,
-                       const Pose6& centre, const HillClimbOptions& o, TaskPool* pool) {
+HillClimbOutcome climb(const std::function<double(const Pose6&)>& score, const Pose6& start,
+                       const Pose6& centre, const HillClimbOptions& o) {
   const std::array<double, kAxes> limit = {
       o.max_xy_m, o.max_xy_m, o.max_z_m, o.max_roll_pitch_rad, o.max_roll_pitch_rad, o.max_yaw_rad};
   std::array<double, kAxes> step = {o.initial_xy_step_m,      o.initial_xy_step_m,
@@ -58,7 +58,7 @@ HillClimbOutcome climb(const ExactScorer& scorer, const PointList& base_points, 
                                               o.min_angle_step_rad, o.min_angle_step_rad};
   HillClimbOutcome out;
   out.pose = start;
-  out.score_start = out.score = scorer.score(base_points, start, pool);
+  out.score_start = out.score = score(start);
   out.evaluations = 1;
   Pose6 start_copy = centre;
   bool any_step_left = true;
@@ -72,7 +72,7 @@ HillClimbOutcome climb(const ExactScorer& scorer, const PointList& base_points, 
         const double origin = coord(start_copy, a);
         v += sign * step[a];
         if (std::abs(v - origin) > limit[a] + 1e-12) continue;
-        const double s = scorer.score(base_points, trial, pool);
+        const double s = score(trial);
         ++out.evaluations;
         if (s > out.score) {
           out.score = s;
@@ -99,32 +99,44 @@ HillClimbOutcome climb(const ExactScorer& scorer, const PointList& base_points, 
   return out;
 }
 
+PointList thinEvenly(const PointList& points, size_t max_points) {
+  if (points.size() <= max_points) return points;
+  PointList out;
+  out.reserve(max_points);
+  const double stride = static_cast<double>(points.size()) / max_points;
+  for (size_t i = 0; i < max_points; ++i) out.push_back(points[static_cast<size_t>(i * stride)]);
+  return out;
+}
+
 HillClimbOutcome hillClimb(const ExactScorer& scorer, const PointList& base_points,
                            const Pose6& start, const HillClimbOptions& o, TaskPool* pool) {
-  if (o.coarse_points == 0 || base_points.size() < 2 * o.coarse_points) {
-    return climb(scorer, base_points, start, start, o, pool);
-  }
+  ClimbObjective f;
+  f.full = [&](const Pose6& p) { return scorer.score(base_points, p, pool); };
   PointList coarse;
-  coarse.reserve(o.coarse_points);
-  const double stride = static_cast<double>(base_points.size()) / o.coarse_points;
-  for (size_t i = 0; i < o.coarse_points; ++i) {
-    coarse.push_back(base_points[static_cast<size_t>(i * stride)]);
+  if (o.coarse_points > 0 && base_points.size() >= 2 * o.coarse_points) {
+    coarse = thinEvenly(base_points, o.coarse_points);
+    f.coarse = [&](const Pose6& p) { return scorer.score(coarse, p, pool); };
   }
+  return hillClimb(f, start, o);
+}
+
+HillClimbOutcome hillClimb(const ClimbObjective& f, const Pose6& start, const HillClimbOptions& o) {
+  if (!f.coarse) return climb(f.full, start, start, o);
   HillClimbOptions first = o;
   first.min_xy_step_m *= 4.0;
   first.min_z_step_m *= 4.0;
   first.min_angle_step_rad *= 4.0;
-  const HillClimbOutcome c = climb(scorer, coarse, start, start, first, pool);
+  const HillClimbOutcome c = climb(f.coarse, start, start, first);
   HillClimbOptions second = o;
   second.initial_xy_step_m = std::min(o.initial_xy_step_m, 2.0 * first.min_xy_step_m);
   second.initial_z_step_m = std::min(o.initial_z_step_m, 2.0 * first.min_z_step_m);
   second.initial_angle_step_rad =
       std::min(o.initial_angle_step_rad, 2.0 * first.min_angle_step_rad);
   second.max_evaluations = std::max(1, o.max_evaluations - c.evaluations);
-  HillClimbOutcome out = climb(scorer, base_points, c.pose, start, second, pool);
+  HillClimbOutcome out = climb(f.full, c.pose, start, second);
   out.evaluations += c.evaluations;
   // The coarse climb's pose could score below the start on all points: never return worse.
-  out.score_start = scorer.score(base_points, start, pool);
+  out.score_start = f.full(start);
   ++out.evaluations;
   if (out.score_start > out.score) {
     out.pose = start;

@@ -95,7 +95,7 @@ void expandInterval(const SearchProblem& problem, const GlobalSearchOptions& opt
   const bool exact_layer = n.heading_level == 0 && child <= max_layer;
   if (exact_layer) {
     problem.scoreQuad(n.j0, child, n.tx, n.ty, h, quad);
-    counts.point_lookups += 4 * static_cast<int64_t>(problem.points(n.j0).size());
+    counts.point_lookups += 4 * problem.preparedPoints(n.j0);
   }
   for (int dy = 0; dy < 2; ++dy) {
     const int ty = n.ty + dy * h;

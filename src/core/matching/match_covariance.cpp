@@ -30,7 +30,7 @@ MatchCovariance searchCovariance(const SearchProblem& problem, const SearchOutco
   const int nx = tx1 - tx0 + 1, ny = ty1 - ty0 + 1;
 
   // Score the neighbourhood (on a thinned point set when asked), heading by heading.
-  const size_t prepared = problem.points(optimum.heading_index).size();
+  const size_t prepared = static_cast<size_t>(problem.preparedPoints(optimum.heading_index));
   const int stride = o.max_points > 0 && prepared > o.max_points
                          ? static_cast<int>((prepared + o.max_points - 1) / o.max_points)
                          : 1;

@@ -6,6 +6,8 @@
 
 #include <Eigen/Geometry>
 
+#include "gmm_localization/core/matching/reflectivity_scan.h"
+
 namespace gmm_localization {
 
 Registration::Registration(const RegistrationOptions& options, std::shared_ptr<TaskPool> pool,
@@ -24,114 +26,7 @@ Registration::Registration(const RegistrationOptions& options, std::shared_ptr<T
   }
 }
 
-std::string RegistrationOptions::validate() const {
-  std::string e = filter.validate();
-  if (!e.empty()) return "filter: " + e;
-  if (!(heading_step_rad > 0.0 && heading_step_rad < 0.2)) {
-    return "heading_step_rad=" + std::to_string(heading_step_rad) + " must be in (0, 0.2)";
-  }
-  if (!(z_search_m >= 0.0 && z_search_m <= 20.0)) {
-    return "z_search_m=" + std::to_string(z_search_m) + " must be in [0, 20]";
-  }
-  if (refine_max_points < 10) return "refine_max_points must be >= 10";
-  e = hill_climb.validate();
-  if (!e.empty()) return "hill_climb: " + e;
-  e = covariance.validate();
-  if (!e.empty()) return "covariance: " + e;
-  e = certificate.validate();
-  if (!e.empty()) return "certificate: " + e;
-  if (interval_search_min_headings < 1) return "interval_search_min_headings must be >= 1";
-  e = global.validate();
-  if (!e.empty()) return "global: " + e;
-  if (!(min_map_coverage >= 0.0 && min_map_coverage <= 1.0)) {
-    return "min_map_coverage must be in [0, 1]";
-  }
-  if (threads < 0 || threads > TaskPool::kMaxThreads) {
-    return "threads=" + std::to_string(threads) + " must be in [0, " +
-           std::to_string(TaskPool::kMaxThreads) + "] (0: one per hardware thread)";
-  }
-  return {};
-}
-
-const char* registrationErrorName(RegistrationError kind) {
-  switch (kind) {
-    case RegistrationError::kNone:
-      return "none";
-    case RegistrationError::kInvalidOptions:
-      return "invalid_options";
-    case RegistrationError::kInvalidPrior:
-      return "invalid_prior";
-    case RegistrationError::kNoPoints:
-      return "no_points";
-    case RegistrationError::kInvalidWindow:
-      return "invalid_window";
-    case RegistrationError::kOffMap:
-      return "off_map";
-    case RegistrationError::kLowCoverage:
-      return "low_coverage";
-    case RegistrationError::kNumerical:
-      return "numerical";
-    case RegistrationError::kSearchBudget:
-      return "search_budget";
-  }
-  return "unknown";
-}
-
-double bestHeightOffset(const ChunkMap& map, const PointList& points, const Pose6& prior,
-                        double range_m) {
-  const double step = map.options().z_step_m;
-  const int n = static_cast<int>(std::floor(range_m / step));
-  if (n <= 0 || points.empty()) return 0.0;
-  const double c = std::cos(prior.yaw), s = std::sin(prior.yaw);
-  struct Cell {
-    int64_t gx, gy;
-    int32_t zb;
-  };
-  std::vector<Cell> cells(points.size());
-  int64_t gx_min = INT64_MAX, gy_min = INT64_MAX, gx_max = INT64_MIN, gy_max = INT64_MIN;
-  for (size_t i = 0; i < points.size(); ++i) {
-    const Eigen::Vector3f& q = points[i];
-    const CellIndex cell =
-        map.geometry().cellAt(prior.x + c * q.x() - s * q.y(), prior.y + s * q.x() + c * q.y());
-    cells[i] = {cell.x, cell.y, map.zBin(prior.z + q.z())};
-    gx_min = std::min(gx_min, cell.x);
-    gx_max = std::max(gx_max, cell.x);
-    gy_min = std::min(gy_min, cell.y);
-    gy_max = std::max(gy_max, cell.y);
-  }
-  // Direct table reads through a chunk grid (no per-point chunk hash look-up).
-  const RasterWindow raster(map, gx_min, gy_min, gx_max, gy_max);
-  const int64_t mask = (int64_t{1} << raster.shift()) - 1;
-  std::vector<int64_t> score(2 * n + 1, 0);
-  for (const Cell& p : cells) {
-    const MapChunk* chunk = raster.chunk(p.gx, p.gy);
-    if (chunk == nullptr) continue;
-    const RasterLayer& L = chunk->layer(0);
-    const size_t i =
-        (static_cast<size_t>(p.gy & mask) << raster.shift()) + static_cast<size_t>(p.gx & mask);
-    for (int k = -n; k <= n; ++k) score[k + n] += MapChunk::spanValue(L, i, p.zb + k);
-  }
-  // Ties prefer the smallest |offset|.
-  int best = n;
-  for (int k = 0; k <= 2 * n; ++k) {
-    if (score[k] > score[best] ||
-        (score[k] == score[best] && std::abs(k - n) < std::abs(best - n))) {
-      best = k;
-    }
-  }
-  return score[best] > 0 ? (best - n) * step : 0.0;
-}
-
 namespace {
-
-PointList thin(const PointList& pts, size_t max_points) {
-  if (pts.size() <= max_points) return pts;
-  PointList out;
-  out.reserve(max_points);
-  const double stride = static_cast<double>(pts.size()) / max_points;
-  for (size_t i = 0; i < max_points; ++i) out.push_back(pts[static_cast<size_t>(i * stride)]);
-  return out;
-}
 
 bool finitePose(const Pose6& p) {
   return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) && std::isfinite(p.roll) &&
@@ -225,12 +120,38 @@ RegistrationResult<PreparedSearch> Registration::prepare(const ChunkMap& map,
   if (!bad_window.empty()) {
     return R::failure(RegistrationError::kInvalidWindow, "search window: " + bad_window);
   }
-  if (window.sizeH() >= options_.interval_search_min_headings && options_.global.max_points > 0) {
-    f.points = thin(f.points, options_.global.max_points);
+  // The fused method's ground returns: filtered as the reflectivity layer's (levelled already).
+  FilteredScan ground;
+  SecondChannel second;
+  if (request.fused != nullptr) {
+    if (request.fused->map == nullptr) {
+      return R::failure(RegistrationError::kInvalidOptions,
+                        "fused method: no reflectivity map given");
+    }
+    const std::string incompatible = channelCompatibility(map, *request.fused->map);
+    if (!incompatible.empty()) {
+      return R::failure(RegistrationError::kInvalidOptions,
+                        "fused method: the height and reflectivity maps cannot be searched "
+                        "together: " +
+                            incompatible);
+    }
+    ground = filterScan(request.fused->points, 0.0, 0.0,
+                        reflectivityRegistrationOptions(options_).filter);
+    if (ground.points.empty()) {
+      return R::failure(RegistrationError::kNoPoints,
+                        "fused method: no ground returns left after filtering (" +
+                            std::to_string(request.fused->points.size()) + " given)");
+    }
+    second = {request.fused->map, &ground.points};
   }
-  auto problem = SearchProblem::create(map, f.points, window, pool_.get());
+  if (window.sizeH() >= options_.interval_search_min_headings && options_.global.max_points > 0) {
+    f.points = thinEvenly(f.points, options_.global.max_points);
+    ground.points = thinEvenly(ground.points, options_.global.max_points);
+  }
+  auto problem = SearchProblem::create(map, f.points, window, pool_.get(),
+                                       request.fused != nullptr ? &second : nullptr);
   if (!problem.ok()) return R::failure(RegistrationError::kOffMap, problem.error());
-  return PreparedSearch{std::move(f), z_offset, std::move(problem.value())};
+  return PreparedSearch{std::move(f), z_offset, std::move(problem.value()), std::move(ground)};
 }
 
 RegistrationResult<MatchResult> Registration::match(const ChunkMap& map,
@@ -358,7 +279,7 @@ RegistrationResult<MatchResult> Registration::finishLocal(
           .toRotationMatrix()
           .transpose()
           .cast<float>();
-  PointList refine_points = thin(f.voxels, options_.refine_max_points);
+  PointList refine_points = thinEvenly(f.voxels, options_.refine_max_points);
   for (Eigen::Vector3f& p : refine_points) p = unlevel * p;
   double reach = 0.0;
   for (const Eigen::Vector3f& p : refine_points) reach = std::max<double>(reach, p.norm());
@@ -367,11 +288,26 @@ RegistrationResult<MatchResult> Registration::finishLocal(
   HillClimbOptions hc = options_.hill_climb;
   hc.max_yaw_rad = std::max(hc.max_yaw_rad, options_.heading_step_rad);
   hc.max_xy_m = std::max(hc.max_xy_m, map.geometry().resolution_m);
-  out.refinement = hillClimb(scorer, refine_points, out.search.pose, hc, pool_.get());
+  size_t refined = refine_points.size();
+  if (request.fused != nullptr) {  // the sum of both exact likelihoods (fused_channel.h)
+    const PointList ground = thinEvenly(prepared.ground.voxels, options_.refine_max_points);
+    double ground_reach = 0.0;
+    for (const Eigen::Vector3f& p : ground) {
+      ground_reach = std::max<double>(ground_reach, p.head<2>().norm());
+    }
+    const ChunkMap& ground_map = *request.fused->map;
+    const ExactScorer ground_scorer(ground_map, ground_map.options().ll_floor, out.search.pose.x,
+                                    out.search.pose.y, ground_reach + 2.0);
+    out.refinement = fusedHillClimb(scorer, refine_points, ground_scorer, ground, out.search.pose,
+                                    hc, pool_.get());
+    refined += ground.size();
+  } else {
+    out.refinement = hillClimb(scorer, refine_points, out.search.pose, hc, pool_.get());
+  }
   out.pose = out.refinement.pose;
   out.pose.yaw = wrapAngle(out.pose.yaw);
   out.log_likelihood_per_point =
-      out.refinement.score / static_cast<double>(std::max<size_t>(1, refine_points.size()));
+      out.refinement.score / static_cast<double>(std::max<size_t>(1, refined));
   double t3 = tick();
   if (timing) timing->refine_s = t3 - t2;
 

@@ -1,5 +1,7 @@
 #include "gmm_localization/core/matching/search_problem.h"
 
+#include "cell_points.h"
+
 #include <algorithm>
 #include <climits>
 #include <cmath>
@@ -8,66 +10,6 @@
 #include <Eigen/Geometry>
 
 namespace gmm_localization {
-
-namespace {
-
-/// Sorts by (gy, gx, zb). A scan's cells span a few hundred rows, columns and z bins, so the
-/// three fit a packed key of under 64 bits, sorted by a byte-wise LSD radix sort (a few
-/// linear passes instead of n log n comparisons: this runs once per heading). Falls back to
-/// a comparison sort when the ranges do not fit.
-void sortCellPoints(std::vector<CellPoint>& pts) {
-  if (pts.size() < 2) return;
-  int32_t lo[3] = {INT32_MAX, INT32_MAX, INT32_MAX}, hi[3] = {INT32_MIN, INT32_MIN, INT32_MIN};
-  for (const CellPoint& p : pts) {
-    const int32_t v[3] = {p.gy, p.gx, p.zb};
-    for (int k = 0; k < 3; ++k) {
-      lo[k] = std::min(lo[k], v[k]);
-      hi[k] = std::max(hi[k], v[k]);
-    }
-  }
-  int bits[3];
-  for (int k = 0; k < 3; ++k) {
-    const uint64_t range = static_cast<uint64_t>(int64_t{hi[k]} - lo[k]);
-    bits[k] = 0;
-    while (bits[k] < 63 && (range >> bits[k]) != 0) ++bits[k];
-  }
-  const int total = bits[0] + bits[1] + bits[2];
-  if (total > 62) {
-    std::sort(pts.begin(), pts.end(), [](const CellPoint& a, const CellPoint& b) {
-      if (a.gy != b.gy) return a.gy < b.gy;
-      if (a.gx != b.gx) return a.gx < b.gx;
-      return a.zb < b.zb;
-    });
-    return;
-  }
-  std::vector<uint64_t> keys(pts.size()), tmp(pts.size());
-  for (size_t i = 0; i < pts.size(); ++i) {
-    const CellPoint& p = pts[i];
-    keys[i] = (static_cast<uint64_t>(int64_t{p.gy} - lo[0]) << (bits[1] + bits[2])) |
-              (static_cast<uint64_t>(int64_t{p.gx} - lo[1]) << bits[2]) |
-              static_cast<uint64_t>(int64_t{p.zb} - lo[2]);
-  }
-  for (int shift = 0; shift < total; shift += 8) {
-    size_t count[257] = {0};
-    for (uint64_t k : keys) ++count[((k >> shift) & 0xff) + 1];
-    for (int b = 0; b < 256; ++b) count[b + 1] += count[b];
-    for (uint64_t k : keys) tmp[count[(k >> shift) & 0xff]++] = k;
-    keys.swap(tmp);
-  }
-  const uint64_t mask_x = bits[1] > 0 ? ((uint64_t{1} << bits[1]) - 1) : 0;
-  const uint64_t mask_z = bits[2] > 0 ? ((uint64_t{1} << bits[2]) - 1) : 0;
-  for (size_t i = 0; i < pts.size(); ++i) {
-    const uint64_t k = keys[i];
-    pts[i].zb = static_cast<int32_t>(int64_t{lo[2]} + static_cast<int64_t>(k & mask_z));
-    pts[i].gx =
-        static_cast<int32_t>(int64_t{lo[1]} + static_cast<int64_t>((k >> bits[2]) & mask_x));
-    pts[i].gy =
-        static_cast<int32_t>(int64_t{lo[0]} + static_cast<int64_t>(k >> (bits[1] + bits[2])));
-    pts[i].count = 1;
-  }
-}
-
-}  // namespace
 
 SearchWindow SearchWindow::fromExtent(const Pose6& prior, double half_extent_x_m,
                                       double half_extent_y_m, double half_heading_rad,
@@ -136,67 +78,55 @@ size_t RasterWindow::chunksPresent() const {
       std::count_if(grid_.begin(), grid_.end(), [](const MapChunk* c) { return c != nullptr; }));
 }
 
-Result<SearchProblem> SearchProblem::create(const ChunkMap& map, const PointList& points,
-                                            const SearchWindow& window, TaskPool* pool) {
-  const std::string invalid = window.validate();
-  if (!invalid.empty()) return Result<SearchProblem>::failure("search window: " + invalid);
-  if (points.empty()) return Result<SearchProblem>::failure("no points left to match");
+std::string channelCompatibility(const ChunkMap& first, const ChunkMap& second) {
+  const MapGeometry& a = first.geometry();
+  const MapGeometry& b = second.geometry();
+  const RasterOptions& ra = first.options();
+  const RasterOptions& rb = second.options();
+  auto num = [](double v) { return std::to_string(v); };
+  if (a.resolution_m != b.resolution_m) {
+    return "the maps differ in resolution (" + num(a.resolution_m) + " against " +
+           num(b.resolution_m) + " m): their cells must coincide";
+  }
+  if (a.origin_x_m != b.origin_x_m || a.origin_y_m != b.origin_y_m) {
+    return "the maps differ in origin ((" + num(a.origin_x_m) + ", " + num(a.origin_y_m) +
+           ") against (" + num(b.origin_x_m) + ", " + num(b.origin_y_m) +
+           ") m): their cells must coincide";
+  }
+  if (ra.chunk_shift != rb.chunk_shift || ra.num_layers != rb.num_layers) {
+    return "the maps differ in chunk geometry (chunk_shift " + std::to_string(ra.chunk_shift) +
+           " against " + std::to_string(rb.chunk_shift) + ", num_layers " +
+           std::to_string(ra.num_layers) + " against " + std::to_string(rb.num_layers) + ")";
+  }
+  if (ra.ll_floor != rb.ll_floor || ra.ll_ceiling != rb.ll_ceiling) {
+    return "the maps differ in score quantization (ll_floor, ll_ceiling): their table values "
+           "would not add up to a log-likelihood";
+  }
+  return {};
+}
 
-  const MapGeometry& g = map.geometry();
+Result<SearchProblem> SearchProblem::create(const ChunkMap& map, const PointList& points,
+                                            const SearchWindow& window, TaskPool* pool,
+                                            const SecondChannel* second) {
+  using R = Result<SearchProblem>;
+  const std::string invalid = window.validate();
+  if (!invalid.empty()) return R::failure("search window: " + invalid);
+  if (points.empty()) return R::failure("no points left to match");
+  if (second != nullptr) {
+    if (second->map == nullptr || second->points == nullptr) {
+      return R::failure("second channel: no map or no points given");
+    }
+    const std::string incompatible = channelCompatibility(map, *second->map);
+    if (!incompatible.empty()) return R::failure("second channel: " + incompatible);
+    if (second->points->empty()) return R::failure("second channel: no points left to match");
+  }
   const RasterOptions& ro = map.options();
-  std::vector<std::vector<CellPoint>> rotated(window.sizeH());
-  int64_t gx_min = std::numeric_limits<int64_t>::max(), gy_min = gx_min;
-  int64_t gx_max = std::numeric_limits<int64_t>::min(), gy_max = gx_max;
-  const Pose6& prior = window.prior;
-  // Heights do not change with heading: bin them once.
-  std::vector<int32_t> z_bins(points.size());
-  for (size_t i = 0; i < points.size(); ++i) z_bins[i] = map.zBin(prior.z + points[i].z());
-  // Headings in parallel, each with its own extent (combined after, in heading order).
-  struct Extent {
-    int64_t gx_min, gy_min, gx_max, gy_max;
-  };
-  std::vector<Extent> extents(static_cast<size_t>(window.sizeH()),
-                              {gx_min, gy_min, gx_max, gy_max});
-  parallelFor(pool, window.sizeH(), [&](int j) {
-    Extent& e = extents[static_cast<size_t>(j)];
-    const double yaw = prior.yaw + (j - window.half_h) * window.heading_step_rad;
-    const double c = std::cos(yaw), s = std::sin(yaw);
-    std::vector<CellPoint>& out = rotated[j];
-    out.resize(points.size());
-    for (size_t i = 0; i < points.size(); ++i) {
-      const Eigen::Vector3f& q = points[i];
-      const double x = prior.x + c * q.x() - s * q.y();
-      const double y = prior.y + s * q.x() + c * q.y();
-      const CellIndex cell = g.cellAt(x, y);
-      out[i] = {static_cast<int32_t>(cell.x - window.half_x),
-                static_cast<int32_t>(cell.y - window.half_y), z_bins[i], 1u};
-    }
-    // Sort by (row, column, z bin): the tables store each cell's z span contiguously and the
-    // cells row by row, so this order reads them almost sequentially. Then merge points that
-    // share a cell and bin.
-    sortCellPoints(out);
-    size_t w = 0;
-    for (size_t i = 0; i < out.size(); ++i) {
-      if (w > 0 && out[w - 1].zb == out[i].zb && out[w - 1].gy == out[i].gy &&
-          out[w - 1].gx == out[i].gx) {
-        out[w - 1].count += out[i].count;
-      } else {
-        out[w++] = out[i];
-      }
-    }
-    out.resize(w);
-    for (const CellPoint& p : out) {
-      e.gx_min = std::min<int64_t>(e.gx_min, p.gx);
-      e.gx_max = std::max<int64_t>(e.gx_max, p.gx);
-      e.gy_min = std::min<int64_t>(e.gy_min, p.gy);
-      e.gy_max = std::max<int64_t>(e.gy_max, p.gy);
-    }
-  });
-  for (const Extent& e : extents) {
-    gx_min = std::min(gx_min, e.gx_min);
-    gx_max = std::max(gx_max, e.gx_max);
-    gy_min = std::min(gy_min, e.gy_min);
-    gy_max = std::max(gy_max, e.gy_max);
+  // Heights of the first channel are relative to the prior's; the second's are absolute.
+  std::vector<search_detail::RotatedPoints> rotated;
+  rotated.push_back(search_detail::rotatePoints(map, points, window, window.prior.z, pool));
+  if (second != nullptr) {
+    rotated.push_back(
+        search_detail::rotatePoints(*second->map, *second->points, window, 0.0, pool));
   }
 
   // The coarsest layer, searched exhaustively (Algorithm 3), is the smallest that covers the
@@ -218,30 +148,44 @@ Result<SearchProblem> SearchProblem::create(const ChunkMap& map, const PointList
   const int top = std::max(covering(4), std::min(covering(2), kPruningLayer));
   // Node blocks of layer `top` starting inside the window reach 2^top - 1 cells beyond it.
   const int64_t reach = (int64_t{1} << top) - 1;
-  RasterWindow raster(map, gx_min, gy_min, gx_max + window.sizeX() - 1 + reach,
-                      gy_max + window.sizeY() - 1 + reach);
-  if (raster.chunksPresent() == 0) {
-    return Result<SearchProblem>::failure(
-        "off the map: no rasterized map chunk under the scan anywhere in the search window");
+  SearchProblem problem(map, window);
+  const ChunkMap* maps[2] = {&map, second != nullptr ? second->map : nullptr};
+  const PointList* lists[2] = {&points, second != nullptr ? second->points : nullptr};
+  for (size_t c = 0; c < rotated.size(); ++c) {
+    const search_detail::RotatedPoints& r = rotated[c];
+    RasterWindow raster(*maps[c], r.gx_min, r.gy_min, r.gx_max + window.sizeX() - 1 + reach,
+                        r.gy_max + window.sizeY() - 1 + reach);
+    if (raster.chunksPresent() == 0) {
+      return R::failure(std::string(c == 0 ? "off the map" : "off the second channel's map") +
+                        ": no rasterized map chunk under the scan anywhere in the search window");
+    }
+    problem.channels_.push_back({maps[c], std::move(raster), std::move(rotated[c].per_heading),
+                                 static_cast<int64_t>(lists[c]->size())});
+    problem.scan_points_ += static_cast<int64_t>(lists[c]->size());
   }
-  SearchProblem problem(map, window, std::move(raster));
-  problem.rotated_ = std::move(rotated);
-  problem.scan_points_ = static_cast<int64_t>(points.size());
   problem.top_layer_ = top;
   return problem;
 }
 
 int64_t SearchProblem::score(int heading_index, int layer, int tx, int ty) const {
   int64_t sum = 0;
-  const int shift = raster_.shift();
+  for (const Channel& ch : channels_) sum += channelScore(ch, heading_index, layer, tx, ty);
+  return sum;
+}
+
+int64_t SearchProblem::channelScore(const Channel& ch, int heading_index, int layer, int tx,
+                                    int ty) {
+  const RasterWindow& raster = ch.raster;
+  int64_t sum = 0;
+  const int shift = raster.shift();
   const int64_t mask = (int64_t{1} << shift) - 1;
-  for (const CellPoint& p : rotated_[heading_index]) {
+  for (const CellPoint& p : ch.rotated[heading_index]) {
     const int64_t gx = static_cast<int64_t>(p.gx) + tx;
     const int64_t gy = static_cast<int64_t>(p.gy) + ty;
-    const MapChunk* c = raster_.chunk(gx, gy);
+    const MapChunk* c = raster.chunk(gx, gy);
     const uint8_t v = c != nullptr ? c->value(layer, p.zb, static_cast<int>(gx & mask),
                                               static_cast<int>(gy & mask))
-                                   : raster_.blockBound(layer, gx, gy, p.zb);
+                                   : raster.blockBound(layer, gx, gy, p.zb);
     sum += static_cast<int64_t>(p.count) * v;
   }
   return sum;
@@ -249,15 +193,22 @@ int64_t SearchProblem::score(int heading_index, int layer, int tx, int ty) const
 
 void SearchProblem::scoreQuad(int heading_index, int layer, int tx, int ty, int h,
                               int64_t out[4]) const {
+  out[0] = out[1] = out[2] = out[3] = 0;
+  for (const Channel& ch : channels_) channelScoreQuad(ch, heading_index, layer, tx, ty, h, out);
+}
+
+void SearchProblem::channelScoreQuad(const Channel& ch, int heading_index, int layer, int tx,
+                                     int ty, int h, int64_t out[4]) {
+  const RasterWindow& raster = ch.raster;
   int64_t s00 = 0, s10 = 0, s01 = 0, s11 = 0;
-  const int shift = raster_.shift();
+  const int shift = raster.shift();
   const int64_t mask = (int64_t{1} << shift) - 1;
   const size_t dy = static_cast<size_t>(h) << shift;
   // Points come sorted by row and column, so consecutive points mostly share a chunk: keep the
   // last chunk's layer at hand.
   int64_t cached_cx = INT64_MIN, cached_cy = INT64_MIN;
   const RasterLayer* L = nullptr;
-  for (const CellPoint& p : rotated_[heading_index]) {
+  for (const CellPoint& p : ch.rotated[heading_index]) {
     const int64_t gx = static_cast<int64_t>(p.gx) + tx;
     const int64_t gy = static_cast<int64_t>(p.gy) + ty;
     const int64_t lx = gx & mask, ly = gy & mask;
@@ -267,15 +218,15 @@ void SearchProblem::scoreQuad(int heading_index, int layer, int tx, int ty, int 
       if ((gx >> shift) != cached_cx || (gy >> shift) != cached_cy) {
         cached_cx = gx >> shift;
         cached_cy = gy >> shift;
-        const MapChunk* c = raster_.chunk(gx, gy);
+        const MapChunk* c = raster.chunk(gx, gy);
         L = c != nullptr ? &c->layer(layer) : nullptr;
       }
       if (L == nullptr) {  // not loaded: the blocks may still reach into loaded neighbours
         if (layer == 0) continue;
-        s00 += count * raster_.blockBound(layer, gx, gy, p.zb);
-        s10 += count * raster_.blockBound(layer, gx + h, gy, p.zb);
-        s01 += count * raster_.blockBound(layer, gx, gy + h, p.zb);
-        s11 += count * raster_.blockBound(layer, gx + h, gy + h, p.zb);
+        s00 += count * raster.blockBound(layer, gx, gy, p.zb);
+        s10 += count * raster.blockBound(layer, gx + h, gy, p.zb);
+        s01 += count * raster.blockBound(layer, gx, gy + h, p.zb);
+        s11 += count * raster.blockBound(layer, gx + h, gy + h, p.zb);
         continue;
       }
       const size_t i = (static_cast<size_t>(ly) << shift) + static_cast<size_t>(lx);
@@ -284,24 +235,36 @@ void SearchProblem::scoreQuad(int heading_index, int layer, int tx, int ty, int 
       s01 += count * MapChunk::spanValue(*L, i + dy, p.zb);
       s11 += count * MapChunk::spanValue(*L, i + dy + h, p.zb);
     } else {
-      s00 += count * raster_.blockBound(layer, gx, gy, p.zb);
-      s10 += count * raster_.blockBound(layer, gx + h, gy, p.zb);
-      s01 += count * raster_.blockBound(layer, gx, gy + h, p.zb);
-      s11 += count * raster_.blockBound(layer, gx + h, gy + h, p.zb);
+      s00 += count * raster.blockBound(layer, gx, gy, p.zb);
+      s10 += count * raster.blockBound(layer, gx + h, gy, p.zb);
+      s01 += count * raster.blockBound(layer, gx, gy + h, p.zb);
+      s11 += count * raster.blockBound(layer, gx + h, gy + h, p.zb);
     }
   }
-  out[0] = s00;
-  out[1] = s10;
-  out[2] = s01;
-  out[3] = s11;
+  out[0] += s00;
+  out[1] += s10;
+  out[2] += s01;
+  out[3] += s11;
 }
 
 int64_t SearchProblem::scoreBlock(int heading_index, int tx0, int ty0, int nx, int ny,
                                   std::vector<int64_t>& out, int point_stride) const {
   std::vector<int32_t> acc(static_cast<size_t>(nx) * ny, 0);
-  const int shift = raster_.shift();
+  int64_t scored = 0;
+  for (const Channel& ch : channels_) {
+    scored += channelScoreBlock(ch, heading_index, tx0, ty0, nx, ny, acc, point_stride);
+  }
+  out.assign(acc.begin(), acc.end());
+  return scored;
+}
+
+int64_t SearchProblem::channelScoreBlock(const Channel& ch, int heading_index, int tx0, int ty0,
+                                         int nx, int ny, std::vector<int32_t>& acc,
+                                         int point_stride) {
+  const RasterWindow& raster = ch.raster;
+  const int shift = raster.shift();
   const int64_t mask = (int64_t{1} << shift) - 1;
-  const std::vector<CellPoint>& pts = rotated_[heading_index];
+  const std::vector<CellPoint>& pts = ch.rotated[heading_index];
   const size_t stride = static_cast<size_t>(std::max(1, point_stride));
   int64_t scored = 0;
   for (size_t k = 0; k < pts.size(); k += stride) {
@@ -316,7 +279,7 @@ int64_t SearchProblem::scoreBlock(int heading_index, int tx0, int ty0, int nx, i
       while (i < nx) {
         // One segment: the part of the row inside one chunk (consecutive cell spans).
         const int seg = static_cast<int>(std::min<int64_t>(nx - i, mask + 1 - (gx & mask)));
-        const MapChunk* c = raster_.chunk(gx, gy);
+        const MapChunk* c = raster.chunk(gx, gy);
         if (c != nullptr) {
           const RasterLayer& L = c->layer(0);
           const size_t first =
@@ -329,8 +292,13 @@ int64_t SearchProblem::scoreBlock(int heading_index, int tx0, int ty0, int nx, i
       }
     }
   }
-  out.assign(acc.begin(), acc.end());
   return scored;
+}
+
+int64_t SearchProblem::preparedPoints(int heading_index) const {
+  int64_t n = 0;
+  for (const Channel& ch : channels_) n += static_cast<int64_t>(ch.rotated[heading_index].size());
+  return n;
 }
 
 Pose6 SearchProblem::pose(int heading_index, int tx, int ty) const {

@@ -1,5 +1,5 @@
 // The reflectivity method (core/matching/reflectivity_scan.h, MatchProcessor with
-// MapLayer::kReflectivity) on a synthetic painted road with known ground truth: the ground
+// MatchMethod::kReflectivity) on a synthetic painted road with known ground truth: the ground
 // returns are selected and levelled, the branch-and-bound equals the exhaustive search on
 // them, seeded poses are recovered from offsets, and a cloud without intensity is answered
 // with the reason.
@@ -169,7 +169,7 @@ TEST_F(ReflectivityMatchTest, BranchAndBoundEqualsTheExhaustiveSearchOnReflectiv
 
 TEST_F(ReflectivityMatchTest, RecoversSeededPosesAndLeavesHeightAndTiltToThePrior) {
   MatchMethodOptions method;
-  method.layer = MapLayer::kReflectivity;
+  method.method = MatchMethod::kReflectivity;
   auto processor =
       MatchProcessor::create(RegistrationOptions(), LocalizationPolicyOptions(), method);
   ASSERT_TRUE(processor.ok()) << processor.error();
@@ -206,7 +206,7 @@ TEST_F(ReflectivityMatchTest, RecoversSeededPosesAndLeavesHeightAndTiltToThePrio
 
 TEST_F(ReflectivityMatchTest, ACloudWithoutIntensityIsAnsweredWithTheReason) {
   MatchMethodOptions method;
-  method.layer = MapLayer::kReflectivity;
+  method.method = MatchMethod::kReflectivity;
   auto processor =
       MatchProcessor::create(RegistrationOptions(), LocalizationPolicyOptions(), method);
   ASSERT_TRUE(processor.ok()) << processor.error();

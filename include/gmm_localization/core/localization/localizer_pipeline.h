@@ -46,7 +46,7 @@ struct LocalizerPipelineOptions {
   FilterPolicyOptions filter;
   RegistrationOptions registration;
   LocalizationPolicyOptions policy;
-  MatchMethodOptions method;          ///< the map layer matched (height or reflectivity)
+  MatchMethodOptions method;          ///< what is matched (height, reflectivity or fused)
   MatchSessionOptions session;        ///< the matcher nodelet's session (and scan queue)
   double scan_arrival_delay_s = 0.0;  ///< scan available at stamp + this [s]
   /// >= 0: a global search (a lost prior, run by the global worker) takes this long instead of
@@ -80,6 +80,10 @@ class LocalizerPipeline {
 
   /// The rasterized map to search (shared, immutable while the pipeline holds it).
   void setMap(std::shared_ptr<const ChunkMap> map) { map_ = std::move(map); }
+  /// The fused method's second map: the reflectivity layer, rasterized like setMap's.
+  void setReflectivityMap(std::shared_ptr<const ChunkMap> map) {
+    reflectivity_map_ = std::move(map);
+  }
   /// Like the matcher's configured initial pose: searched with the wide window at the next
   /// scan (not carried by odometry), and again after each reset when
   /// session.configured_pose_on_reset.
@@ -145,6 +149,7 @@ class LocalizerPipeline {
   MatchProcessor processor_;
   MatchSession<WaitingScan> session_;
   std::shared_ptr<const ChunkMap> map_;
+  std::shared_ptr<const ChunkMap> reflectivity_map_;  ///< the fused method's (else null)
 
   std::optional<InFlight> in_flight_;         ///< the worker's match
   std::optional<InFlight> global_in_flight_;  ///< the global worker's

@@ -86,11 +86,20 @@ struct MatchReport {
   std::vector<TraversalNode> traversal;
 };
 
-/// The map layer the scans are matched against: the paper's height (the default) or the
-/// reflectivity baseline (core/map/reflectivity_layer.h; the map must hold that layer).
+/// What the scans are matched against: the paper's height layer (the default), the
+/// reflectivity baseline (core/map/reflectivity_layer.h; the map must hold that layer), or both
+/// likelihoods summed (core/matching/fused_channel.h; the height map plus its reflectivity
+/// layer).
+enum class MatchMethod { kHeight, kReflectivity, kFused };
+const char* matchMethodName(MatchMethod method);  ///< "height", "reflectivity", "fused"
+/// The method named `name`; false (out untouched) for an unknown name.
+bool parseMatchMethod(const std::string& name, MatchMethod* out);
+
 struct MatchMethodOptions {
-  MapLayer layer = MapLayer::kHeight;
+  MatchMethod method = MatchMethod::kHeight;
   ReflectivityLayerOptions reflectivity;
+  /// The ground returns' intensity is needed (reflectivity and fused).
+  bool needsIntensity() const { return method != MatchMethod::kHeight; }
   std::string validate() const;
 };
 
@@ -105,9 +114,12 @@ class MatchProcessor {
   /// the body twist for deskewing (null: no deskewing). `want_traversal`: record the search
   /// traversal. `now` (seconds, any epoch) enables the timings. Never throws; every failure is a
   /// report with a reason. An accepted report always has a finite pose and covariance.
+  /// `reflectivity_map`: the fused method's second map (its reflectivity layer, rasterized like
+  /// `map`); without it a fused scan is skipped with the reason.
   MatchReport process(const ChunkMap& map, ScanInput scan, const Prior& prior,
                       const BodyTwist* twist, bool want_traversal,
-                      const std::function<double()>& now = nullptr) const;
+                      const std::function<double()>& now = nullptr,
+                      const ChunkMap* reflectivity_map = nullptr) const;
 
   const RegistrationOptions& registrationOptions() const { return tracking_.options(); }
   const LocalizationPolicyOptions& policyOptions() const { return policy_; }

@@ -3,6 +3,7 @@
 // search's discrete optimum, for sub-cell x, y and heading and for z, roll and pitch.
 
 #include <cstddef>
+#include <functional>
 #include <string>
 
 #include "gmm_localization/core/matching/exact_scorer.h"
@@ -41,6 +42,20 @@ struct HillClimbOutcome {
   int evaluations = 0;
   bool hit_limit = false;  ///< some coordinate ended on its constraint
 };
+
+/// The pose objective of a climb [nats]: `full` on all points; `coarse` on the thinned ones of
+/// the coarse-to-fine stage (HillClimbOptions::coarse_points), empty: one climb with `full`.
+struct ClimbObjective {
+  std::function<double(const Pose6&)> full;
+  std::function<double(const Pose6&)> coarse;
+};
+
+/// Every (size / max_points)-th point, `max_points` of them; all when there are no more.
+PointList thinEvenly(const PointList& points, size_t max_points);
+
+/// The coordinate pattern search of hillClimb below on any objective.
+HillClimbOutcome hillClimb(const ClimbObjective& objective, const Pose6& start,
+                           const HillClimbOptions& options);
 
 /// Coordinate pattern search over (x, y, z, roll, pitch, yaw) maximising scorer.score(points,
 /// pose) within the box around `start`, coarse-to-fine (options.coarse_points). Deterministic;

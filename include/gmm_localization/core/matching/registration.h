@@ -13,6 +13,7 @@
 
 #include "gmm_localization/core/common/result.h"
 #include "gmm_localization/core/common/task_pool.h"
+#include "gmm_localization/core/matching/fused_channel.h"
 #include "gmm_localization/core/matching/global_certificate.h"
 #include "gmm_localization/core/matching/global_search.h"
 #include "gmm_localization/core/matching/grid_search.h"
@@ -65,6 +66,10 @@ struct MatchRequest {
   /// MatchResult::reference_deficit_per_point, to calibrate the certificate's margin.
   bool has_reference = false;
   Pose6 reference;
+  /// The fused method (fused_channel.h): the scan's ground returns and the reflectivity map,
+  /// searched and refined together with the height points (null: the height points alone).
+  /// Owned by the caller for the duration of the call.
+  const FusedChannel* fused = nullptr;
 };
 
 struct MatchResult {
@@ -113,6 +118,7 @@ struct PreparedSearch {
   FilteredScan filtered;
   double z_offset_m = 0.0;
   SearchProblem problem;
+  FilteredScan ground;  ///< the fused method's filtered ground returns (else empty)
 };
 
 /// Why a registration produced no pose. Callers decide on the kind, never on the message text

@@ -7,6 +7,16 @@
 // j in [0, 2 half_h]. z, roll and pitch stay at the prior's. The cloud is rotated once per
 // heading ("rotate once, then translations are integer cell offsets"): a translation by whole
 // cells shifts every point's cell index by the same integers, exactly.
+//
+// Channels. A problem may carry a second point set scored against a second map over the same
+// poses (the fused method: the reflectivity layer's ground returns, MatchRequest::fused in
+// registration.h). Each channel has its own raster window and its own per-heading cells, and every
+// score below is the sum of the two channels' scores. The sum of two admissible upper bounds is an
+// admissible upper bound of the sum (max over a node's leaves of a + b <= max of a + max of b), so
+// every search, bound, covariance and certificate built on these scores stays exact and unchanged.
+// Both maps must share cells, chunks, layers and score quantization (channelCompatibility): then a
+// translation by whole cells shifts both channels' points alike, node blocks cover the same
+// cells in both, and the sum of table values is a sum of log-likelihoods in one unit.
 
 #include <cstdint>
 #include <string>
@@ -93,27 +103,48 @@ class RasterWindow {
   std::vector<const MapChunk*> grid_;
 };
 
+/// The second channel of a search (see the top of this file): `points` in the levelled base
+/// frame with absolute heights (their z is not raised by the prior's, unlike the first
+/// channel's), scored against `map`. Both must outlive SearchProblem::create.
+struct SecondChannel {
+  const ChunkMap* map = nullptr;
+  const PointList* points = nullptr;
+};
+
+/// Empty when the two maps can be searched together as channels of one problem (same cell
+/// size and origin, chunk size, number of layers and score quantization), else the reason.
+std::string channelCompatibility(const ChunkMap& first, const ChunkMap& second);
+
 /// A scan prepared for searching one window: its points rotated and discretised per heading.
 class SearchProblem {
  public:
   /// `points` in the levelled base frame (see filterScan). Fails when the window is invalid,
   /// there are no points, or no point of any pose lands on a loaded chunk ("off the map").
-  /// `pool`: the headings in parallel (the same problem).
+  /// `pool`: the headings in parallel (the same problem). `second`: a second channel; fails too
+  /// when its map is incompatible (channelCompatibility), it has no points, or none of them
+  /// lands on a loaded chunk of its map.
   static Result<SearchProblem> create(const ChunkMap& map, const PointList& points,
-                                      const SearchWindow& window, TaskPool* pool = nullptr);
+                                      const SearchWindow& window, TaskPool* pool = nullptr,
+                                      const SecondChannel* second = nullptr);
 
   const SearchWindow& window() const { return window_; }
+  /// The first channel's map (the geometry and quantization both channels share).
   const ChunkMap& map() const { return *map_; }
-  const RasterWindow& raster() const { return raster_; }
-  const std::vector<CellPoint>& points(int heading_index) const { return rotated_[heading_index]; }
-  int numHeadings() const { return static_cast<int>(rotated_.size()); }
-  /// Scan points per heading before merging (the n of the log-likelihood).
+  int numChannels() const { return static_cast<int>(channels_.size()); }
+  const RasterWindow& raster(int channel = 0) const { return channels_[channel].raster; }
+  const std::vector<CellPoint>& points(int heading_index, int channel = 0) const {
+    return channels_[channel].rotated[heading_index];
+  }
+  /// Prepared (merged) points at a heading over all channels: the table reads of one score.
+  int64_t preparedPoints(int heading_index) const;
+  int numHeadings() const { return window_.sizeH(); }
+  /// Scan points per heading before merging, over all channels (the n of the log-likelihood).
   int64_t scanPoints() const { return scan_points_; }
   /// Coarsest layer used: the smallest that covers the window in at most a 4 x 4 block grid,
   /// or in a 2 x 2 grid when that is layer 4 or finer; capped by the layers the map holds.
   int topLayer() const { return top_layer_; }
 
-  /// Score (sum of layer values over points) of node (j, layer, tx, ty).
+  /// Score (sum of layer values over points, over the channels) of node (j, layer, tx, ty).
   int64_t score(int heading_index, int layer, int tx, int ty) const;
   /// Scores of the four nodes (j, layer, tx + a h, ty + b h), a, b in {0, 1}, in one pass over
   /// the points (the children of a branch-and-bound node): out[b * 2 + a]. Children outside
@@ -131,13 +162,23 @@ class SearchProblem {
   Pose6 pose(int heading_index, int tx, int ty) const;
 
  private:
-  SearchProblem(const ChunkMap& map, const SearchWindow& w, RasterWindow raster)
-      : map_(&map), window_(w), raster_(std::move(raster)) {}
+  /// One channel: its map's raster over the window and its points per heading.
+  struct Channel {
+    const ChunkMap* map;
+    RasterWindow raster;
+    std::vector<std::vector<CellPoint>> rotated;
+    int64_t scan_points;
+  };
+  SearchProblem(const ChunkMap& map, const SearchWindow& w) : map_(&map), window_(w) {}
+  static int64_t channelScore(const Channel& ch, int heading_index, int layer, int tx, int ty);
+  static void channelScoreQuad(const Channel& ch, int heading_index, int layer, int tx, int ty,
+                               int h, int64_t out[4]);
+  static int64_t channelScoreBlock(const Channel& ch, int heading_index, int tx0, int ty0, int nx,
+                                   int ny, std::vector<int32_t>& acc, int point_stride);
 
   const ChunkMap* map_;
   SearchWindow window_;
-  RasterWindow raster_;
-  std::vector<std::vector<CellPoint>> rotated_;
+  std::vector<Channel> channels_;
   int64_t scan_points_ = 0;
   int top_layer_ = 0;
 };
