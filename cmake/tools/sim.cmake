@@ -4,6 +4,7 @@
 gmm_add_tool(simulate
   SOURCES src/tools/simulate/simulate.cpp src/tools/simulate/simulate_options.cpp src/tools/simulate/simulate_help.cpp
           src/tools/simulate/simulate_bag_writer.cpp src/tools/simulate/simulate_imperfection_options.cpp
+          src/tools/simulate/simulate_gnss.cpp
   LIBS gmm_sim ${catkin_LIBRARIES})
 target_include_directories(simulate SYSTEM PRIVATE ${catkin_INCLUDE_DIRS})
 

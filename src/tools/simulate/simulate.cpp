@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "common/cli_args.h"
+#include "gmm_localization/sim/gnss_model.h"
 #include "gmm_localization/sim/kitti_writer.h"
 #include "gmm_localization/sim/map_pose_error.h"
 #include "gmm_localization/sim/simulation.h"
@@ -31,7 +32,9 @@ class OutputSink : public sim::SimulationSink {
     return bag ? bag->onMergedScan(s) : Status::success();
   }
   Status onGroundTruth(const sim::VehicleState& s) override {
-    return bag ? bag->onGroundTruth(s) : Status::success();
+    if (!bag) return Status::success();
+    const Status g = gnssUpTo(s.t);
+    return g ? bag->onGroundTruth(s) : g;
   }
   Status onOdometry(const sim::OdomSample& o) override {
     return bag ? bag->onOdometry(o) : Status::success();
@@ -43,8 +46,29 @@ class OutputSink : public sim::SimulationSink {
     return kitti->write(s.points, s.base_to_map, s.stamp);
   }
   std::vector<Eigen::Isometry3d> truth;  // the poses written to poses.txt, in order
+  // --gnss realistic: the receiver, its options and the trajectory its truth comes from.
+  std::unique_ptr<sim::GnssModel> gnss;
+  const tools::SimulateGnssOptions* gnss_options = nullptr;
+  const sim::Trajectory* trajectory = nullptr;
+  double epoch_s = 0.0;
 
  private:
+  /// Writes the fixes stamped up to and including t (before the ground truth at t).
+  Status gnssUpTo(double t) {
+    if (!gnss) return Status::success();
+    fixes_.clear();
+    gnss->advanceTo(
+        std::nextafter(t, HUGE_VAL),
+        [this](double ft) { return trajectory->pose(ft).translation(); }, &fixes_);
+    for (const sim::GnssSample& f : fixes_) {
+      auto msg = tools::navSatFixFromSample(f, gnss_options->georeference, epoch_s);
+      if (!msg) return Status::failure(msg.error());
+      const Status w = bag->onGnssFix(gnss_options->topic, *msg);
+      if (!w) return w;
+    }
+    return Status::success();
+  }
+  std::vector<sim::GnssSample> fixes_;
   long count_ = 0;
 };
 
@@ -129,6 +153,9 @@ int main(int argc, char** argv) {
       s.lidar().model().azimuthStepDeg());
   if (opt.config.extrinsic_error.mode != sim::ExtrinsicErrorMode::kNone) printExtrinsicErrors(s);
   if (opt.config.pass.aging.mode != sim::MapAgingMode::kNone) printAging(s.world());
+  if (opt.gnss.config.mode != sim::GnssMode::kNone) {
+    std::printf("%s\n", tools::describeGnss(opt.gnss).c_str());
+  }
   if (opt.dry_run) return 0;
 
   OutputSink out;
@@ -139,6 +166,12 @@ int main(int argc, char** argv) {
     if (!b) return fail(b.error());
     bag = std::move(*b);
     out.bag = bag.get();
+    if (opt.gnss.config.mode != sim::GnssMode::kNone) {
+      out.gnss = std::make_unique<sim::GnssModel>(opt.gnss.config, s.beginTime());
+      out.gnss_options = &opt.gnss;
+      out.trajectory = &s.trajectory();
+      out.epoch_s = opt.bag.epoch_s;
+    }
   }
   if (!opt.kitti_dir.empty()) {
     auto k = sim::KittiWriter::open(opt.kitti_dir, opt.kitti_labels);

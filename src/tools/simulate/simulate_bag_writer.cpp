@@ -219,5 +219,9 @@ Status BagSink::onImu(const sim::ImuSample& s) {
   return guarded([&]() { bag_.write("/imu/data", m.header.stamp, m); });
 }
 
+Status BagSink::onGnssFix(const std::string& topic, const sensor_msgs::NavSatFix& fix) {
+  return guarded([&]() { bag_.write(topic, fix.header.stamp, fix); });
+}
+
 }  // namespace tools
 }  // namespace gmm_localization

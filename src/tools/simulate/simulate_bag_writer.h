@@ -7,6 +7,7 @@
 //   /ground_truth/odom           nav_msgs/Odometry        frame map, child base_link
 //   /tf                          tf2_msgs/TFMessage       odom -> base_link (from the INS)
 //   /tf_static                   tf2_msgs/TFMessage       base_link -> velodyne_N (latched)
+//   /gnss/fix                    sensor_msgs/NavSatFix    frame base_link (simulate --gnss)
 // Cloud fields: x y z intensity (float32), ring (uint16), label (uint8), time (float32, seconds
 // since header.stamp = revolution start, or the earliest start for the merged cloud).
 // Stamps are epoch + trajectory time; each message is recorded at the time it becomes
@@ -16,6 +17,7 @@
 #include <string>
 
 #include <rosbag/bag.h>
+#include <sensor_msgs/NavSatFix.h>
 
 #include "gmm_localization/sim/simulation.h"
 
@@ -41,6 +43,8 @@ class BagSink : public sim::SimulationSink {
   Status onGroundTruth(const sim::VehicleState& s) override;
   Status onOdometry(const sim::OdomSample& o) override;
   Status onImu(const sim::ImuSample& m) override;
+  /// A GNSS fix (simulate_gnss.h), written on `topic` at its stamp.
+  Status onGnssFix(const std::string& topic, const sensor_msgs::NavSatFix& fix);
   Status close();
 
  private:

@@ -67,6 +67,17 @@ INS and ground truth:
   --imu-gyro-noise R, --imu-accel-noise A   white noise [rad/s], [m/s^2] (0.002, 0.03)
   --odom-rate HZ (100)  --imu-rate HZ (200)  --gt-rate HZ (100)
   --noise-seed N           LIDAR noise seed (derived from pass and pass seed)
+GNSS (bag only; docs/simulator.md "GNSS"):
+  --gnss MODE              none | realistic: sensor_msgs/NavSatFix on /gnss/fix (frame
+                           base_link), white noise + a first-order Gauss-Markov bias (none)
+  --gnss-rate HZ (5)  --gnss-white M (0.5)  --gnss-bias M (1.0)  --gnss-bias-tau S (60)
+                           per horizontal axis; vertical x1.5; reported sigma = sqrt(white^2 +
+                           bias^2)
+  --gnss-outage START_S:DURATION_S   no solution (status NO_FIX, NaN position) from START_S
+                           after the segment start for DURATION_S; repeatable
+  --gnss-seed N            (derived from pass and pass seed)
+  --utm-zone Z, --georef-origin E,N,U   where the world sits on the Earth (17N,
+                           277000,4686000,250); build the map with the same two options
 Output:
   --bag FILE               write a rosbag (topics: /velodyne_points, /velodyne_N/velodyne_points
                            with --per-sensor-clouds, /ins/odom, /imu/data, /ground_truth/odom,

@@ -323,6 +323,9 @@ Result<SimulateOptions> parseSimulateOptions(int argc, char** argv) {
     auto imperfect = applyImperfectionOption(a, v, &c, &imperfection);
     if (!imperfect) return R::failure(imperfect.error());
     if (*imperfect) continue;
+    auto gnss = applyGnssOption(a, v, &o.gnss);
+    if (!gnss) return R::failure(gnss.error());
+    if (*gnss) continue;
     if (a == "--bag") {
       o.bag.path = v;
       continue;
@@ -376,6 +379,8 @@ Result<SimulateOptions> parseSimulateOptions(int argc, char** argv) {
                       std::string("realistic changes the poses of --kitti DIR: give --kitti"));
   const Status world_check = checkImperfectionOptions(c, imperfection);
   if (!world_check) return R::failure(world_check.error());
+  const Status gnss_check = finishGnssOptions(c.ins.seed, &o.gnss);
+  if (!gnss_check) return R::failure(gnss_check.error());
   c.emit_revolutions = o.bag.per_sensor_clouds;
   c.emit_merged = !o.bag.path.empty() && o.bag.merged_cloud;
   c.emit_deskewed = !o.kitti_dir.empty();

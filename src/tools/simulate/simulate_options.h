@@ -6,6 +6,7 @@
 #include "gmm_localization/sim/map_pose_error.h"
 #include "gmm_localization/sim/simulation.h"
 #include "simulate/simulate_bag_writer.h"
+#include "simulate/simulate_gnss.h"
 #include "simulate/simulate_imperfection_options.h"
 
 namespace gmm_localization {
@@ -18,6 +19,7 @@ struct SimulateOptions {
   int kitti_every = 1;
   bool kitti_labels = false;
   sim::MapPoseErrorConfig map_pose_error;  // error of the poses written to poses.txt
+  SimulateGnssOptions gnss;                // --gnss: fixes on /gnss/fix (bag only)
   bool quiet = false;
   bool dry_run = false;
   bool help = false;
