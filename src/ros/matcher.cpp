@@ -33,6 +33,14 @@ Matcher::Matcher(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& nam
       scan_rate_(0.5 * options_.expected_scan_rate_hz, 2.0 * options_.expected_scan_rate_hz),
       acquisition_(
           AcquisitionWatchOptions{acquisitionWarnAfter(options_.policy.relocalization), 15.0}) {
+  if (options_.method.method == MatchMethod::kFused) {
+    // The matcher receives one layer from one map server; the fused method needs two.
+    throw ConfigError("parameter " + pnh_.resolveName("method") +
+                      " = 'fused' is not supported by the matcher nodelet: it receives one map "
+                      "layer from one map server, the fused method needs the height and the "
+                      "reflectivity layer. The fused method runs offline today: evaluate bag "
+                      "--method fused --map MAP (MAP and MAP/reflectivity)");
+  }
   auto processor = MatchProcessor::create(options_.registration, options_.policy, options_.method);
   if (!processor) throw ConfigError(processor.error());
   processor_ = std::make_unique<MatchProcessor>(std::move(processor).value());

@@ -12,6 +12,7 @@
 #include "evaluate/evaluate_yaml.h"
 #include "gmm_localization/core/common/types.h"
 #include "gmm_localization/core/localization/localizer_pipeline.h"
+#include "gmm_localization/core/matching/search_problem.h"
 #include "gmm_localization/ros/matcher_options.h"
 
 namespace gmm_localization {
@@ -271,11 +272,37 @@ Result<EvaluationResults> runBagEvaluation(const BagEvaluationConfig& c, std::os
 
   log << "rasterizing the map along the route (" << c.raster_radius_m << " m) ..." << std::endl;
   RouteMapStats map_stats;
-  auto map = rasterizeAlongRoute(c.map, raster, *truth, c.raster_radius_m, c.threads, &map_stats);
+  const MatchMethod method = po.method.method;
+  auto map = rasterizeAlongRoute(
+      c.map, raster, *truth, c.raster_radius_m, c.threads, &map_stats,
+      method == MatchMethod::kReflectivity ? MapLayer::kReflectivity : MapLayer::kHeight);
   if (!map) return R::failure(map.error());
   log << "  " << map_stats.tiles << " tiles, " << map_stats.chunks << " chunks, "
       << map_stats.bytes / 1e6 << " MB in " << map_stats.seconds << " s" << std::endl;
   pipeline->setMap(*map);
+  // The fused method's second map: the reflectivity layer beside the height map.
+  std::shared_ptr<const ChunkMap> reflectivity_map;
+  if (method == MatchMethod::kFused) {
+    if (c.reflectivity_map.empty()) {
+      return R::failure(
+          "the matcher's method is fused: run evaluate with --method fused (it "
+          "loads MAP and MAP/reflectivity)");
+    }
+    RouteMapStats stats;
+    auto second = rasterizeAlongRoute(c.reflectivity_map, raster, *truth, c.raster_radius_m,
+                                      c.threads, &stats, MapLayer::kReflectivity);
+    if (!second) return R::failure("--method fused: " + second.error());
+    const std::string incompatible = channelCompatibility(**map, **second);
+    if (!incompatible.empty()) {
+      return R::failure("--method fused: '" + c.map + "' and '" + c.reflectivity_map +
+                        "' cannot be searched together: " + incompatible);
+    }
+    log << "  reflectivity layer: " << stats.tiles << " tiles, " << stats.chunks << " chunks, "
+        << stats.bytes / 1e6 << " MB in " << stats.seconds << " s" << std::endl;
+    map_stats.seconds += stats.seconds;
+    reflectivity_map = *second;
+    pipeline->setReflectivityMap(reflectivity_map);
+  }
 
   EvaluationResults out;
   out.info.mode = "bag";
@@ -290,7 +317,8 @@ Result<EvaluationResults> runBagEvaluation(const BagEvaluationConfig& c, std::os
   if (!processor) return R::failure(processor.error());
   std::unique_ptr<OffsetExperiment> offsets;
   if (c.offset_scans > 0) {
-    offsets = std::make_unique<OffsetExperiment>(*processor, *map, c.offsets, steadySeconds);
+    offsets = std::make_unique<OffsetExperiment>(*processor, *map, c.offsets, steadySeconds,
+                                                 reflectivity_map);
   }
   BagRun run(c, matcher, *pipeline, *truth, total_scans, offsets.get(), out);
   BagVisitor v;

@@ -20,7 +20,9 @@ namespace eval {
 
 struct BagEvaluationConfig {
   std::string bag;
-  std::string map;
+  std::string map;  ///< the layer matched (MAP, or MAP/reflectivity for --method reflectivity)
+  /// --method fused: the second map, MAP/reflectivity (empty otherwise).
+  std::string reflectivity_map;
   std::string matcher_yaml, ekf_yaml, map_server_yaml;
   std::vector<std::string> matcher_overrides, ekf_overrides;  ///< "key=value" (YAML value)
   BagTopics topics;

@@ -4,6 +4,7 @@
 
 #include "gmm_localization/core/map/map_store.h"
 #include "gmm_localization/core/raster/raster_region.h"
+#include "gmm_localization/ros/map_server_load.h"
 
 namespace gmm_localization {
 namespace eval {
@@ -12,11 +13,13 @@ Result<std::shared_ptr<const ChunkMap>> rasterizeAlongRoute(const std::string& m
                                                             const RasterOptions& options,
                                                             const Trajectory& route,
                                                             double radius_m, int threads,
-                                                            RouteMapStats* stats) {
+                                                            RouteMapStats* stats, MapLayer wanted) {
   using R = Result<std::shared_ptr<const ChunkMap>>;
   const auto t0 = std::chrono::steady_clock::now();
   auto store = MapStore::open(map_directory);
-  if (!store) return R::failure(store.error());
+  if (!store) return R::failure(store.error() + node::layerHint(map_directory, wanted));
+  const std::string layer = node::layerProblem(*store, wanted);
+  if (!layer.empty()) return R::failure(layer);
 
   // Route points every few metres (the planner measures distances to chunk squares).
   const double spacing_m = 5.0;

@@ -9,6 +9,7 @@
 
 #include "evaluate/evaluate_metrics.h"
 #include "gmm_localization/core/common/result.h"
+#include "gmm_localization/core/map/reflectivity_layer.h"
 #include "gmm_localization/core/raster/chunk_map.h"
 #include "gmm_localization/core/raster/raster_options.h"
 #include "gmm_localization/ros/map_server_options.h"
@@ -28,12 +29,14 @@ struct RouteMapStats {
 };
 
 /// Rasterizes every chunk with data within radius_m of the route (ground-truth samples at least
-/// every spacing_m), on `threads` threads. Fails with the reason (unreadable map, bad tile).
+/// every spacing_m), on `threads` threads. Fails with the reason (unreadable map, bad tile, not
+/// the `wanted` layer: then how to build it).
 Result<std::shared_ptr<const ChunkMap>> rasterizeAlongRoute(const std::string& map_directory,
                                                             const RasterOptions& options,
                                                             const Trajectory& route,
                                                             double radius_m, int threads,
-                                                            RouteMapStats* stats = nullptr);
+                                                            RouteMapStats* stats = nullptr,
+                                                            MapLayer wanted = MapLayer::kHeight);
 
 }  // namespace eval
 }  // namespace gmm_localization

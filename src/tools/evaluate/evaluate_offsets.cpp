@@ -50,9 +50,11 @@ TraversalFigure paperStyleFigure(const MatchReport& r) {
 
 OffsetExperiment::OffsetExperiment(const MatchProcessor& processor,
                                    std::shared_ptr<const ChunkMap> map,
-                                   const OffsetOptions& options, std::function<double()> clock)
+                                   const OffsetOptions& options, std::function<double()> clock,
+                                   std::shared_ptr<const ChunkMap> reflectivity_map)
     : processor_(processor),
       map_(std::move(map)),
+      reflectivity_map_(std::move(reflectivity_map)),
       options_(options),
       clock_(std::move(clock)),
       sampler_(options.seed, options.radius_m, options.max_heading_rad) {
@@ -116,7 +118,7 @@ namespace {
 MatchReport searchFrom(const MatchProcessor& processor, const ChunkMap& map, const ScanInput& scan,
                        const Pose6& truth, const PlanarOffset& off,
                        const std::optional<BodyTwist>& twist, bool want_traversal,
-                       const std::function<double()>& clock) {
+                       const std::function<double()>& clock, const ChunkMap* reflectivity_map) {
   Prior prior;
   prior.source = PriorSource::kConfigured;
   prior.pose = truth;
@@ -129,7 +131,7 @@ MatchReport searchFrom(const MatchProcessor& processor, const ChunkMap& map, con
   with_truth.has_reference = true;
   with_truth.reference = truth;
   return processor.process(map, std::move(with_truth), prior, twist ? &*twist : nullptr,
-                           want_traversal, clock);
+                           want_traversal, clock, reflectivity_map);
 }
 
 }  // namespace
@@ -137,7 +139,7 @@ MatchReport searchFrom(const MatchProcessor& processor, const ChunkMap& map, con
 void OffsetExperiment::run(Job& job) {
   if (job.want_traversal) {
     const MatchReport r = searchFrom(processor_, *map_, job.scan, job.truth, options_.figure_offset,
-                                     job.twist, true, clock_);
+                                     job.twist, true, clock_, reflectivity_map_.get());
     if (r.has_result && !r.traversal.empty()) {
       TraversalFigure f = paperStyleFigure(r);
       std::lock_guard<std::mutex> lock(mutex_);
@@ -146,8 +148,8 @@ void OffsetExperiment::run(Job& job) {
   }
   std::vector<OffsetRow> rows;
   for (const PlanarOffset& off : job.offsets) {
-    const MatchReport r =
-        searchFrom(processor_, *map_, job.scan, job.truth, off, job.twist, false, clock_);
+    const MatchReport r = searchFrom(processor_, *map_, job.scan, job.truth, off, job.twist, false,
+                                     clock_, reflectivity_map_.get());
     OffsetRow row;
     row.stamp_s = job.scan.stamp_s;
     row.offset = off;

@@ -49,8 +49,10 @@ struct TraversalFigure {
 
 class OffsetExperiment {
  public:
+  /// `reflectivity_map`: the fused method's second map (null for the other methods).
   OffsetExperiment(const MatchProcessor& processor, std::shared_ptr<const ChunkMap> map,
-                   const OffsetOptions& options, std::function<double()> clock);
+                   const OffsetOptions& options, std::function<double()> clock,
+                   std::shared_ptr<const ChunkMap> reflectivity_map = nullptr);
   ~OffsetExperiment();
 
   /// Queues `trials_per_scan` registrations of `scan` (base_link, not deskewed) around the true
@@ -74,6 +76,7 @@ class OffsetExperiment {
 
   const MatchProcessor& processor_;
   std::shared_ptr<const ChunkMap> map_;
+  std::shared_ptr<const ChunkMap> reflectivity_map_;
   OffsetOptions options_;
   std::function<double()> clock_;
   OffsetSampler sampler_;

@@ -68,8 +68,10 @@ Mode B, score a recording of a real replay (roslaunch gmm_localization replay.la
 Both modes:
     --method M              height (the paper's) | reflectivity (the Levinson baseline: mode A
                             matches against MAP_DIR/reflectivity, built by build_map --layer
-                            reflectivity, with the matcher's method: reflectivity; mode B: the
-                            label of the replay's method) [height]
+                            reflectivity, with the matcher's method: reflectivity) | fused
+                            (both likelihoods summed: mode A matches against MAP_DIR and
+                            MAP_DIR/reflectivity); mode B: the label of the replay's method
+                            [height]
     --world LABEL           a label of the simulated world (e.g. perfect, imperfect), kept in
                             summary.json and used by plot_evaluation.py to group Table I
     --map-poses DIR         a map built from inexact poses: DIR holds the poses it was built
@@ -118,8 +120,8 @@ EvaluateCommand parseEvaluateCommand(int argc, char** argv, const std::string& d
     } else if (key == "--out") {
       c.out = v;
     } else if (key == "--method") {
-      if (v != "height" && v != "reflectivity") {
-        throw std::invalid_argument("--method: '" + v + "' is not height or reflectivity");
+      if (v != "height" && v != "reflectivity" && v != "fused") {
+        throw std::invalid_argument("--method: '" + v + "' is not height, reflectivity or fused");
       }
       c.method = v;
     } else if (key == "--world") {
@@ -192,6 +194,10 @@ EvaluateCommand parseEvaluateCommand(int argc, char** argv, const std::string& d
   if (c.mode == EvaluateCommand::Mode::kBag && c.method == "reflectivity") {
     b.map += "/reflectivity";
     b.matcher_overrides.insert(b.matcher_overrides.begin(), "method=reflectivity");
+  }
+  if (c.mode == EvaluateCommand::Mode::kBag && c.method == "fused") {
+    b.reflectivity_map = b.map + "/reflectivity";
+    b.matcher_overrides.insert(b.matcher_overrides.begin(), "method=fused");
   }
   b.matcher_yaml = config_dir + "/matcher.yaml";
   b.ekf_yaml = config_dir + "/ekf.yaml";

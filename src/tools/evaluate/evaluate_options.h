@@ -13,7 +13,7 @@ struct EvaluateCommand {
   enum class Mode { kHelp, kBag, kRecorded } mode = Mode::kHelp;
   std::string out;                ///< output directory
   std::string world;              ///< --world: a label of the simulated world, kept in the summary
-  std::string method = "height";  ///< --method: the map layer matched (height, reflectivity)
+  std::string method = "height";  ///< --method: height, reflectivity or fused
   std::string map_poses;  ///< --map-poses: mapping poses + their truth (evaluate_map_frame.h)
   BagEvaluationConfig bag;
   RecordedEvaluationConfig recorded;

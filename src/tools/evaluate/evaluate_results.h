@@ -102,7 +102,7 @@ struct RunInfo {
   std::string mode;     ///< "bag" (mode A) or "recorded" (mode B)
   std::string dataset;  ///< downtown | snowy | any label (chooses the paper's row)
   std::string world;    ///< a label of the simulated world (e.g. perfect, imperfect); may be empty
-  std::string method = "height";  ///< the map layer matched (height, reflectivity)
+  std::string method = "height";  ///< what was matched (height, reflectivity, fused)
   std::string map_poses;  ///< --map-poses directory (empty: errors against the exact truth only)
   std::string bag;
   std::string map;
