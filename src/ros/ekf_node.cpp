@@ -37,6 +37,7 @@ EkfNode::EkfNode(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& nam
   if (options_.use_match_status) {
     status_sub_ = nh_.subscribe("status", 20, &EkfNode::onMatchStatus, this, hints);
   }
+  setupGnss();
   relocalize_srv_ = nh_.advertiseService("relocalize", &EkfNode::onRelocalize, this);
   timer_ = nh_.createTimer(ros::Duration(1.0 / options_.publish_rate_hz), &EkfNode::onTimer, this);
   setupDiagnostics();
@@ -50,8 +51,8 @@ EkfNode::EkfNode(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& nam
 EkfNode::~EkfNode() {
   // No callback, timer or diagnostics task may run while the members go away.
   timer_.stop();
-  for (ros::Subscriber* sub :
-       {&imu_sub_, &odom_sub_, &match_sub_, &initialpose_sub_, &status_sub_}) {
+  for (ros::Subscriber* sub : {&imu_sub_, &odom_sub_, &match_sub_, &initialpose_sub_, &status_sub_,
+                               &gnss_sub_, &index_sub_}) {
     sub->shutdown();
   }
   relocalize_srv_.shutdown();

@@ -34,6 +34,8 @@ void EkfNode::setupDiagnostics() {
     s.add("INS twist scale error [%] (sigma)",
           fixed(100.0 * d.twist_scale, 3) + " (" + fixed(100.0 * d.twist_scale_sigma, 3) + ")");
     for (int i = 0; i < kMeasurementSourceCount; ++i) {
+      const bool gnss = i == static_cast<int>(MeasurementSource::kGnssPosition);
+      if (gnss && !options_.filter.gnss_enabled) continue;  // the optional input, off
       const SourceCounters& c = d.sources[i];
       s.add(std::string(sourceName(static_cast<MeasurementSource>(i))) +
                 " fused / gated / invalid / too old / stale / other",
@@ -41,6 +43,12 @@ void EkfNode::setupDiagnostics() {
                 std::to_string(c.rejected_invalid) + " / " + std::to_string(c.rejected_too_old) +
                 " / " + std::to_string(c.rejected_stale) + " / " +
                 std::to_string(c.rejected_other));
+    }
+    if (options_.filter.gnss_enabled) {
+      s.add("gnss fixes received / refused",
+            std::to_string(gnss_fixes_) + " / " + std::to_string(filter_->gnssRefused()));
+      s.add("gnss map georeference", georeference_text_);
+      if (!gnss_last_problem_.empty()) s.add("gnss last problem", gnss_last_problem_);
     }
     s.add("delayed measurements", d.delayed_measurements);
     // Messages dropped for their stamp (an IMU message counts once, whatever its parts).

@@ -111,6 +111,23 @@ FilterPolicyOptions loadFilterPolicyOptions(const ParamSource& parent) {
   return o;
 }
 
+void loadGnssOptions(const ParamSource& nh, EkfNodeOptions* o) {
+  GnssPositionOptions& g = o->filter.gnss;
+  o->filter.gnss_enabled = param(nh, "enabled", o->filter.gnss_enabled);
+  o->gnss_topic = param<std::string>(nh, "topic", o->gnss_topic);
+  o->gnss_timeout_s = param(nh, "timeout_s", o->gnss_timeout_s, 0.001, 3600.0);
+  o->ekf.gnss_gate_probability =
+      param(nh, "gate_probability", o->ekf.gnss_gate_probability, 1e-9, 1.0);
+  g.unknown_sigma_m = param(nh, "unknown_sigma_m", g.unknown_sigma_m, 1e-3, 1000.0);
+  g.min_sigma_m = param(nh, "min_sigma_m", g.min_sigma_m, 0.0, 1000.0);
+  g.max_horizontal_sigma_m =
+      param(nh, "max_horizontal_sigma_m", g.max_horizontal_sigma_m, 1e-3, 1e4);
+  g.use_z = param(nh, "use_z", g.use_z);
+  if (o->gnss_topic.empty()) {
+    throw ConfigError("parameter " + nh.resolveName("topic") + " must not be empty");
+  }
+}
+
 EkfNodeOptions loadEkfNodeOptions(const ParamSource& pnh) {
   EkfNodeOptions o;
   o.map_frame = param<std::string>(pnh, "map_frame", o.map_frame);
@@ -130,6 +147,7 @@ EkfNodeOptions loadEkfNodeOptions(const ParamSource& pnh) {
   o.imu_timeout_s = param(pnh, "imu_timeout_s", o.imu_timeout_s, 0.001, 3600.0);
   o.odom_timeout_s = param(pnh, "odom_timeout_s", o.odom_timeout_s, 0.001, 3600.0);
   o.match_timeout_s = param(pnh, "match_timeout_s", o.match_timeout_s, 0.001, 3600.0);
+  loadGnssOptions(pnh.child("gnss"), &o);
   return o;
 }
 

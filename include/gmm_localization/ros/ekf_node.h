@@ -11,6 +11,10 @@
 //   pose         geometry_msgs/PoseWithCovarianceStamped, the matcher's matches in map_frame
 //                (delayed measurements, Mahalanobis-gated in the core; the first one starts the
 //                filter when nothing else did)
+//   gnss/topic   sensor_msgs/NavSatFix (parameter, only with gnss/enabled): base_link's position
+//                from the fix (lever arm from TF base_frame <- the fix's frame), placed in the map
+//                by the georeference of `map_index` (the map server's), Mahalanobis-gated
+//   map_index    gmm_localization/MapIndex (only with gnss/enabled): the map's georeference
 //   initialpose  geometry_msgs/PoseWithCovarianceStamped (rviz): (re)starts the filter there,
 //                planar (z, roll, pitch kept from the filter), x/y/yaw variance raised to the
 //                relocalization sigmas so the matcher's wide-window match passes the gate
@@ -43,11 +47,13 @@
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
 #include <sensor_msgs/Imu.h>
+#include <sensor_msgs/NavSatFix.h>
 #include <std_srvs/Trigger.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_broadcaster.h>
 #include <tf2_ros/transform_listener.h>
 
+#include "gmm_localization/MapIndex.h"
 #include "gmm_localization/MatchStatus.h"
 #include "gmm_localization/core/common/input_watchdog.h"
 #include "gmm_localization/core/localization/localization_filter.h"
@@ -73,6 +79,10 @@ class EkfNode {
   void onMatch(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg);
   void onInitialPose(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg);
   void onMatchStatus(const MatchStatus::ConstPtr& msg);
+  // ekf_node_gnss.cpp: the optional GNSS input.
+  void setupGnss();
+  void onGnssFix(const sensor_msgs::NavSatFix::ConstPtr& msg);
+  void onMapIndex(const MapIndex::ConstPtr& msg);
   bool onRelocalize(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
   std::optional<Eigen::Quaterniond> imuRotation(const std::string& frame);
   void handleEvents();  // needs mutex_
@@ -92,6 +102,7 @@ class EkfNode {
   tf2_ros::TransformListener tf_listener_;
   tf2_ros::TransformBroadcaster tf_broadcaster_;
   ros::Subscriber imu_sub_, odom_sub_, match_sub_, initialpose_sub_, status_sub_;
+  ros::Subscriber gnss_sub_, index_sub_;  ///< gnss/enabled only
   ros::ServiceServer relocalize_srv_;
   ros::Publisher odometry_pub_;
   ros::Timer timer_;
@@ -103,7 +114,11 @@ class EkfNode {
   FrequencyMonitor imu_rate_, odom_rate_;  ///< the topics' rate and stamps (thread-safe)
   std::string imu_topic_, odom_topic_;     ///< resolved
   InputWatchdog inputs_;                   ///< wall time
-  size_t imu_input_ = 0, odom_input_ = 0, match_input_ = 0;
+  size_t imu_input_ = 0, odom_input_ = 0, match_input_ = 0, gnss_input_ = 0;
+  bool have_georeference_ = false;  ///< a map index was received (gnss/enabled)
+  std::string georeference_text_ = "no map index yet";
+  uint64_t gnss_fixes_ = 0;  ///< NavSatFix messages received
+  std::string gnss_last_problem_;
   ros::WallTime last_fused_match_wall_;
   double last_fused_match_stamp_s_ = NAN;
   ros::Time last_stamp_;  ///< of the last published estimate

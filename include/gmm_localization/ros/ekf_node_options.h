@@ -35,6 +35,10 @@ struct EkfNodeOptions {
   double imu_timeout_s = 0.5;
   double odom_timeout_s = 0.5;
   double match_timeout_s = 3.0;
+  /// GNSS input (keys under `gnss/`; filter.gnss_enabled = gnss/enabled, default false): the
+  /// sensor_msgs/NavSatFix topic, placed in the map by the map index's georeference.
+  std::string gnss_topic = "/gnss/fix";
+  double gnss_timeout_s = 5.0;
 };
 
 /// Throws ConfigError naming the key, value and range.
@@ -44,6 +48,8 @@ EkfNodeOptions loadEkfNodeOptions(const ParamSource& pnh);
 EkfOptions loadEkfOptions(const ParamSource& nh);
 /// FilterPolicyOptions (keys under `policy/`).
 FilterPolicyOptions loadFilterPolicyOptions(const ParamSource& nh);
+/// The GNSS keys (under `gnss/`) into o->filter, o->ekf and o's topic.
+void loadGnssOptions(const ParamSource& nh, EkfNodeOptions* o);
 
 }  // namespace node
 }  // namespace gmm_localization

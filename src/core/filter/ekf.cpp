@@ -56,9 +56,10 @@ Result<Ekf> Ekf::create(const EkfOptions& options) {
 Ekf::Ekf(const EkfOptions& options) : options_(options) {
   for (int s = 0; s < kMeasurementSourceCount; ++s) {
     const auto source = static_cast<MeasurementSource>(s);
-    const double p = source == MeasurementSource::kPose    ? options_.pose_gate_probability
-                     : source == MeasurementSource::kTwist ? options_.twist_gate_probability
-                                                           : options_.imu_gate_probability;
+    const double p = source == MeasurementSource::kPose           ? options_.pose_gate_probability
+                     : source == MeasurementSource::kTwist        ? options_.twist_gate_probability
+                     : source == MeasurementSource::kGnssPosition ? options_.gnss_gate_probability
+                                                                  : options_.imu_gate_probability;
     gate_sq_[s][0] = 0.0;
     for (int dof = 1; dof <= kMaxMeasurementSize; ++dof) {
       gate_sq_[s][dof] = chiSquareQuantile(p, dof);
@@ -164,6 +165,11 @@ FuseReport Ekf::processTwist(const TwistMeasurement& twist) {
 
 FuseReport Ekf::processPose(const PoseMeasurement& pose) {
   return process(makePoseMeasurement(pose, options_), MeasurementSource::kPose, pose.stamp_s);
+}
+
+FuseReport Ekf::processPosition(const PositionMeasurement& position) {
+  return process(makePositionMeasurement(position, options_), MeasurementSource::kGnssPosition,
+                 position.stamp_s);
 }
 
 FuseReport Ekf::raiseCovarianceAt(double stamp_s, double sigma_xy_m, double sigma_yaw_rad) {

@@ -129,6 +129,8 @@ const char* sourceName(MeasurementSource source) {
       return "pose";
     case MeasurementSource::kCovarianceFloor:
       return "covariance_floor";
+    case MeasurementSource::kGnssPosition:
+      return "gnss";
     case MeasurementSource::kCount:
       break;
   }
@@ -196,6 +198,14 @@ Result<EkfMeasurement> makePoseMeasurement(const PoseMeasurement& m, const EkfOp
   MeasurementCovariance cov;
   select6(m.mask, kStateX, values, m.covariance, &indices, &z, &cov);
   return assemble(source, MeasurementModel::kDirect, m.stamp_s, indices, z, cov, options);
+}
+
+Result<EkfMeasurement> makePositionMeasurement(const PositionMeasurement& m,
+                                               const EkfOptions& options) {
+  const int n = m.use_z ? 3 : 2;
+  std::array<int, kMaxMeasurementSize> indices{kStateX, kStateY, kStateZ};
+  return assemble(MeasurementSource::kGnssPosition, MeasurementModel::kDirect, m.stamp_s, indices,
+                  m.position_m.head(n), m.covariance.topLeftCorner(n, n), options);
 }
 
 Result<EkfMeasurement> makeTwistMeasurement(const TwistMeasurement& m, const EkfOptions& options) {

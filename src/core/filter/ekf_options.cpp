@@ -53,7 +53,8 @@ Status EkfOptions::validate() const {
       perStateValid("initial_variance", initial_variance, true, &why) &&
       inRange("pose_gate_probability", pose_gate_probability, 0.0, 1.0, true, &why) &&
       inRange("twist_gate_probability", twist_gate_probability, 0.0, 1.0, true, &why) &&
-      inRange("imu_gate_probability", imu_gate_probability, 0.0, 1.0, true, &why);
+      inRange("imu_gate_probability", imu_gate_probability, 0.0, 1.0, true, &why) &&
+      inRange("gnss_gate_probability", gnss_gate_probability, 0.0, 1.0, true, &why);
   if (!ok) return Status::failure(why);
   if (imu_gravity_removal != GravityRemoval::kStateEstimate &&
       imu_gravity_removal != GravityRemoval::kMeasuredOrientation) {

@@ -1,6 +1,8 @@
 // GNSS initial pose: fixes and headings -> a map-frame pose (gnss_initial_pose.h).
 #include "gmm_localization/core/localization/gnss_initial_pose.h"
 
+#include "gmm_localization/core/localization/gnss_position.h"
+
 #include <cstdio>
 #include <utility>
 
@@ -53,30 +55,11 @@ bool GnssInitialPose::addHeading(const GnssHeading& heading) {
 Result<GnssPoseEstimate> GnssInitialPose::addFix(const Georeference& geo, const GnssFix& fix) {
   using R = Result<GnssPoseEstimate>;
   const GnssInitialPoseOptions& o = options_;
-  if (!geo.hasGrid()) {
-    return R::failure(geo.present ? "the map's georeference names no UTM zone (text only: '" +
-                                        geo.datum + "')"
-                                  : "the map has no georeference");
-  }
-  if (!fix.has_solution) return R::failure("the receiver reports no fix");
-  if (!std::isfinite(fix.stamp_s)) return R::failure("fix stamp not finite");
-  auto in_map = geodeticToMap(geo, fix.position, o.max_distance_from_origin_m);
-  if (!in_map) return R::failure("fix refused: " + in_map.error());
-
-  // Horizontal covariance: ENU -> grid (rotation by the convergence), floored.
-  Eigen::Matrix2d cov_en;
-  const bool known = std::isfinite(fix.east_var_m2) && std::isfinite(fix.north_var_m2) &&
-                     fix.east_var_m2 >= 0.0 && fix.north_var_m2 >= 0.0 &&
-                     std::isfinite(fix.east_north_cov_m2);
-  if (known) {
-    cov_en << fix.east_var_m2, fix.east_north_cov_m2, fix.east_north_cov_m2, fix.north_var_m2;
-  } else {
-    cov_en = Eigen::Matrix2d::Identity() * o.unknown_sigma_m * o.unknown_sigma_m;
-  }
+  auto placed = gnssFixInMap(geo, fix, o.unknown_sigma_m, o.max_distance_from_origin_m);
+  if (!placed) return R::failure(placed.error());
+  const MapPosition* in_map = &placed->antenna;
   const double g = in_map->convergence_rad;
-  Eigen::Matrix2d rot;
-  rot << std::cos(g), -std::sin(g), std::sin(g), std::cos(g);
-  Eigen::Matrix2d cov_xy = rot * cov_en * rot.transpose();
+  Eigen::Matrix2d cov_xy = placed->cov_xy;
   const double largest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(cov_xy).eigenvalues()(1);
   if (!(std::sqrt(std::max(largest, 0.0)) <= o.max_horizontal_sigma_m)) {
     return R::failure(

@@ -43,7 +43,7 @@ std::string FilterPolicyOptions::validate() const {
         rangeProblem("forward_jump_reset_count", forward_jump_reset_count, 1, 1e6),
         rangeProblem("twist_linear_min_sigma_mps", twist_linear_min_sigma_mps, 0.0, 100.0),
         rangeProblem("twist_linear_sigma_per_speed", twist_linear_sigma_per_speed, 0.0, 1.0),
-        defaults.validate()}) {
+        defaults.validate(), gnss.validate()}) {
     if (!e.empty()) return e;
   }
   bool any = false;
@@ -188,6 +188,30 @@ FuseReport LocalizationFilter::addTwist(TwistMeasurement twist) {
     twist.covariance(k, k) = std::max(twist.covariance(k, k), floor_var);
   }
   const FuseReport r = ekf_.processTwist(twist);
+  checkTime(r);
+  return r;
+}
+
+FuseReport LocalizationFilter::addGnss(const GnssFix& fix) {
+  FuseReport r;
+  r.source = MeasurementSource::kGnssPosition;
+  r.stamp_s = fix.stamp_s;
+  if (!active_) {
+    r.outcome = FuseOutcome::kRejectedNotInitialized;
+    r.reason = "filter not running";
+    return r;
+  }
+  auto m = options_.gnss_enabled
+               ? gnssPositionMeasurement(georeference_, fix, options_.gnss,
+                                         fromIsometry(ekf_.pose()).yaw)
+               : Result<PositionMeasurement>::failure("the GNSS input is disabled (gnss/enabled)");
+  if (!m) {
+    ++gnss_refused_;
+    r.outcome = FuseOutcome::kRejectedInvalid;
+    r.reason = "GNSS fix refused: " + m.error();
+    return r;
+  }
+  r = ekf_.processPosition(*m);
   checkTime(r);
   return r;
 }

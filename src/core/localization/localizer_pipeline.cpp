@@ -74,6 +74,11 @@ void LocalizerPipeline::addOdometry(const OdometrySample& sample, const TwistMea
   filter_.addTwist(twist);
 }
 
+FuseReport LocalizerPipeline::addGnss(const GnssFix& fix) {
+  advanceTo(fix.stamp_s);
+  return filter_.addGnss(fix);
+}
+
 void LocalizerPipeline::addScan(ScanInput scan, double processing_latency_s) {
   const double arrival = scan.stamp_s + options_.scan_arrival_delay_s;
   advanceTo(arrival);

@@ -74,6 +74,9 @@ class Ekf {
   FuseReport processTwist(const TwistMeasurement& twist);
   /// Fuses an absolute pose in map (scan match), gated with pose_gate_probability.
   FuseReport processPose(const PoseMeasurement& pose);
+  /// Fuses an absolute position in map (a GNSS fix), gated with gnss_gate_probability; counted
+  /// under MeasurementSource::kGnssPosition.
+  FuseReport processPosition(const PositionMeasurement& position);
   /// Raises the x, y variances to at least sigma_xy_m^2 and the yaw variance to sigma_yaw_rad^2
   /// at stamp_s (MeasurementModel::kCovarianceFloor), in the history like a measurement: a
   /// pose stamped later, even one that arrives late, is fused after it.

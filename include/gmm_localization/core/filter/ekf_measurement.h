@@ -33,6 +33,7 @@ enum class MeasurementSource : int {
   kTwist,                  ///< body twist from odometry (Applanix INS)
   kPose,                   ///< absolute pose in map (scan matcher, relocalization)
   kCovarianceFloor,        ///< the matcher does not confirm the estimate: variances raised
+  kGnssPosition,           ///< absolute position in map from a GNSS fix (optional input)
   kCount
 };
 constexpr int kMeasurementSourceCount = static_cast<int>(MeasurementSource::kCount);
@@ -87,6 +88,16 @@ struct PoseMeasurement {
                               const Matrix6d& covariance);
 };
 
+/// Absolute position of base_link in the map frame, e.g. a GNSS fix placed in the map through
+/// its georeference (core/localization/gnss_position.h). x, y are fused, z too when use_z;
+/// covariance of (x, y, z) [m^2], only the fused block is read.
+struct PositionMeasurement {
+  double stamp_s = 0.0;  ///< [s]
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
+  bool use_z = false;
+};
+
 /// Differential mode for a pose-only odometry source: the body twist that carries
 /// odom_T_base_prev (at t_prev_s) to odom_T_base (at t_s), i.e. the increment
 /// base_prev_T_base as (translation, rotation vector) divided by dt, stamped at t_s, with the
@@ -134,6 +145,9 @@ struct EkfMeasurement {
 /// disabled fails with a reason saying so.
 Result<EkfMeasurement> makePoseMeasurement(const PoseMeasurement& m, const EkfOptions& options);
 Result<EkfMeasurement> makeTwistMeasurement(const TwistMeasurement& m, const EkfOptions& options);
+/// Source kGnssPosition, model kDirect on x, y (and z).
+Result<EkfMeasurement> makePositionMeasurement(const PositionMeasurement& m,
+                                               const EkfOptions& options);
 Result<EkfMeasurement> makeImuOrientationMeasurement(const ImuMeasurement& m,
                                                      const EkfOptions& options);
 Result<EkfMeasurement> makeImuAngularVelocityMeasurement(const ImuMeasurement& m,

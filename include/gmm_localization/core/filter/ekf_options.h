@@ -94,6 +94,9 @@ struct EkfOptions {
   double pose_gate_probability = 0.9999;
   double twist_gate_probability = 0.999999;
   double imu_gate_probability = 0.999999;
+  /// For GNSS positions (processPosition): a fix whose innovation falls outside is dropped
+  /// (multipath, a jump); its covariance is the receiver's, so the gate is wide for it.
+  double gnss_gate_probability = 0.9999;
 
   /// Which parts of an IMU message are fused (its yaw is never fused: it is not absolute).
   bool imu_use_orientation = true;          ///< roll and pitch

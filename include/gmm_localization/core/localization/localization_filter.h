@@ -31,6 +31,7 @@
 
 #include "gmm_localization/core/common/types.h"
 #include "gmm_localization/core/filter/ekf.h"
+#include "gmm_localization/core/localization/gnss_position.h"
 #include "gmm_localization/core/localization/prior_tracker.h"
 
 namespace gmm_localization {
@@ -78,6 +79,11 @@ struct FilterPolicyOptions {
   /// floor covers the time before that estimate has converged.
   double twist_linear_min_sigma_mps = 0.0;
   double twist_linear_sigma_per_speed = 0.0;
+  /// GNSS fixes as x, y (z) position measurements (addGnss; gnss_position.h), gated with
+  /// EkfOptions::gnss_gate_probability. Off by default: the paper's EKF fuses only the IMU and
+  /// the scan matches; its reflectivity baseline in snow ran "with GPS".
+  bool gnss_enabled = false;
+  GnssPositionOptions gnss;
 
   std::string validate() const;
 };
@@ -115,6 +121,20 @@ class LocalizationFilter {
 
   /// How much IMU and twist history is kept while the filter waits for its first pose [s].
   static constexpr double kPendingSpanS = 2.0;
+  /// The map's georeference, which places GNSS fixes in the map frame.
+  void setGeoreference(const Georeference& georeference) { georeference_ = georeference; }
+  /// The GNSS antenna in base_link (the ekf nodelet's TF), removed with the filter's heading.
+  void setGnssLeverArm(const Eigen::Vector3d& antenna_in_base) {
+    options_.gnss.antenna_in_base = antenna_in_base;
+  }
+  /// A GNSS fix (options().gnss_enabled): fused as base_link's position with the filter's
+  /// heading for the lever arm. Refused (kRejectedInvalid, with the reason, counted in
+  /// gnssRefused()) when the input is disabled, the fix has no solution or does not place in
+  /// the map; kRejectedNotInitialized while the filter is not running (a fix does not start it:
+  /// it has no heading; the GNSS initializer gives the first pose).
+  FuseReport addGnss(const GnssFix& fix);
+  uint64_t gnssRefused() const { return gnss_refused_; }
+
   /// Scan match at stamp_s: pose of base_link in map with its 6x6 covariance (x, y, z, roll,
   /// pitch, yaw), fused with match_mask (or starting the filter, see the file comment).
   FuseReport addMatch(double stamp_s, const Pose6& pose, const Matrix6d& covariance);
@@ -166,6 +186,8 @@ class LocalizationFilter {
   int forward_jumps_ = 0;
   uint64_t lockouts_ = 0;
   uint64_t stops_ = 0;
+  Georeference georeference_;
+  uint64_t gnss_refused_ = 0;
   std::vector<FilterEvent> events_;
 };
 

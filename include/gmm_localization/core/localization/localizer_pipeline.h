@@ -101,6 +101,9 @@ class LocalizerPipeline {
   void addImu(const ImuMeasurement& imu);
   /// INS odometry: the pose feeds the odometry buffer, the twist the filter.
   void addOdometry(const OdometrySample& sample, const TwistMeasurement& twist);
+  /// A GNSS fix (the filter's optional GNSS input, placed with setGeoreference's georeference).
+  FuseReport addGnss(const GnssFix& fix);
+  void setGeoreference(const Georeference& georeference) { filter_.setGeoreference(georeference); }
   /// A merged scan in base_link; processing_latency_s: how long its match takes [s] (< 0:
   /// measured with options.clock).
   void addScan(ScanInput scan, double processing_latency_s);
