@@ -5,6 +5,7 @@ find_package(yaml-cpp REQUIRED)
 
 add_library(gmm_evaluate STATIC
   src/tools/evaluate/evaluate_bag.cpp
+  src/tools/evaluate/evaluate_gnss.cpp
   src/tools/evaluate/evaluate_integrity.cpp
   src/tools/evaluate/evaluate_localize.cpp
   src/tools/evaluate/evaluate_map.cpp

@@ -72,6 +72,7 @@ int main(int argc, char** argv) {
     }
     results->info.world = cmd.world;
     results->info.method = cmd.method;
+    results->info.gps = results->info.gps || cmd.gps;
     if (map_frame) {
       results->info.map_poses = cmd.map_poses;
       applyMapFrame(*map_frame, *results);

@@ -11,10 +11,12 @@
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
 #include <sensor_msgs/Imu.h>
+#include <sensor_msgs/NavSatFix.h>
 #include <sensor_msgs/PointCloud2.h>
 
 #include "gmm_localization/ros/cloud_conversion.h"
 #include "gmm_localization/ros/ekf_node_conversions.h"
+#include "gmm_localization/ros/gnss_conversion.h"
 
 namespace gmm_localization {
 namespace eval {
@@ -72,19 +74,21 @@ namespace {
 
 /// One converted message.
 struct Event {
-  enum Kind { kScan, kImu, kOdometry, kGroundTruth } kind = kScan;
+  enum Kind { kScan, kImu, kOdometry, kGroundTruth, kGnss } kind = kScan;
   LabelledScan scan;
   ImuMeasurement imu;
   OdometrySample odometry;
   TwistMeasurement twist;
   PoseStamped2 truth;
+  GnssFix gnss;
 };
 
 /// Reads and converts messages on its own thread (PointCloud2 parsing is a good part of the
 /// cost) into a bounded queue the visiting thread drains in the same order.
 class Prefetcher {
  public:
-  Prefetcher(rosbag::View& view, const BagTopics& topics) : view_(view), topics_(topics) {
+  Prefetcher(rosbag::View& view, const BagTopics& topics, const std::string& gnss_topic)
+      : view_(view), topics_(topics), gnss_topic_(gnss_topic) {
     thread_ = std::thread([this]() { run(); });
   }
   ~Prefetcher() {
@@ -199,6 +203,17 @@ class Prefetcher {
       count(&BagReadStats::odometry, msg->header.stamp.toSec());
       return true;
     }
+    if (!gnss_topic_.empty() && topic == gnss_topic_) {
+      const auto msg = m.instantiate<sensor_msgs::NavSatFix>();
+      if (!msg) {
+        addProblem(topic + ": not a sensor_msgs/NavSatFix");
+        return false;
+      }
+      e.kind = Event::kGnss;
+      e.gnss = node::gnssFixFromMsg(*msg);
+      count(&BagReadStats::gnss, e.gnss.stamp_s);
+      return true;
+    }
     if (topic == topics_.ground_truth) {
       const auto msg = m.instantiate<nav_msgs::Odometry>();
       if (!msg) return false;
@@ -212,6 +227,7 @@ class Prefetcher {
 
   rosbag::View& view_;
   const BagTopics& topics_;
+  const std::string gnss_topic_;  ///< empty: not read
   std::mutex mutex_;
   std::condition_variable changed_;
   std::deque<Event> queue_;
@@ -240,8 +256,15 @@ Result<BagReadStats> visitLocalizationBag(const std::string& path, const BagTopi
   if (visitor.imu) wanted.push_back(topics.imu);
   if (visitor.odometry) wanted.push_back(topics.odom);
   if (visitor.ground_truth) wanted.push_back(topics.ground_truth);
+  if (visitor.gnss) {
+    if (!hasTopic(bag, visitor.gnss_topic)) {
+      return R::failure("bag '" + path + "' has no GNSS fixes on " + visitor.gnss_topic +
+                        " (simulate --gnss realistic writes them)");
+    }
+    wanted.push_back(visitor.gnss_topic);
+  }
   rosbag::View view(bag, rosbag::TopicQuery(wanted));
-  Prefetcher reader(view, topics);
+  Prefetcher reader(view, topics, visitor.gnss ? visitor.gnss_topic : std::string());
   Event e;
   while (reader.next(e)) {
     if (visitor.done && visitor.done()) break;
@@ -257,6 +280,9 @@ Result<BagReadStats> visitLocalizationBag(const std::string& path, const BagTopi
         break;
       case Event::kGroundTruth:
         visitor.ground_truth(e.truth);
+        break;
+      case Event::kGnss:
+        visitor.gnss(e.gnss);
         break;
     }
   }

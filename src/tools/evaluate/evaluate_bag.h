@@ -13,6 +13,7 @@
 #include "evaluate/evaluate_metrics.h"
 #include "gmm_localization/core/common/result.h"
 #include "gmm_localization/core/filter/ekf_measurement.h"
+#include "gmm_localization/core/localization/gnss_initial_pose.h"
 #include "gmm_localization/core/localization/match_processor.h"
 #include "gmm_localization/core/localization/prior_tracker.h"
 
@@ -39,13 +40,17 @@ struct BagVisitor {
   std::function<void(const OdometrySample&, const TwistMeasurement&)> odometry;
   std::function<void(LabelledScan&&)> scan;
   std::function<void(const PoseStamped2&)> ground_truth;
+  /// GNSS fixes (sensor_msgs/NavSatFix on gnss_topic; evaluate --gps), converted as the ekf
+  /// nodelet converts them (ros/gnss_conversion.h). Set: the bag must have the topic.
+  std::function<void(const GnssFix&)> gnss;
+  std::string gnss_topic = "/gnss/fix";
   /// Checked before each message: true stops the visit early (e.g. a duration limit).
   std::function<bool()> done;
 };
 
 /// Counts of what was read and what was skipped (with the reason in `problems`).
 struct BagReadStats {
-  uint64_t scans = 0, imu = 0, odometry = 0, ground_truth = 0;
+  uint64_t scans = 0, imu = 0, odometry = 0, ground_truth = 0, gnss = 0;
   uint64_t skipped = 0;
   std::vector<std::string> problems;  ///< first few reasons for skipped messages
   double first_stamp_s = 0.0, last_stamp_s = 0.0;
@@ -58,8 +63,9 @@ struct BagReadStats {
 Result<LabelledScan> scanFromCloud(const sensor_msgs::PointCloud2& msg,
                                    const std::string& base_frame);
 
-/// Visits every message of the four topics in record order (callbacks may be empty to skip a
-/// topic cheaply). Fails when the bag cannot be opened or lacks the cloud or ground-truth topic.
+/// Visits every message of the four topics (five with visitor.gnss) in record order (callbacks may
+/// be empty to skip a topic cheaply). Fails when the bag cannot be opened or lacks the cloud or
+/// ground-truth topic.
 Result<BagReadStats> visitLocalizationBag(const std::string& path, const BagTopics& topics,
                                           const BagVisitor& visitor);
 

@@ -8,6 +8,7 @@
 #include <ostream>
 
 #include "common/progress_bar.h"
+#include "evaluate/evaluate_gnss.h"
 #include "evaluate/evaluate_map.h"
 #include "evaluate/evaluate_yaml.h"
 #include "gmm_localization/core/common/types.h"
@@ -326,6 +327,8 @@ Result<EvaluationResults> runBagEvaluation(const BagEvaluationConfig& c, std::os
   v.odometry = [&](const OdometrySample& s, const TwistMeasurement& t) { run.odometry(s, t); };
   v.scan = [&](LabelledScan&& s) { run.scan(std::move(s)); };
   v.done = [&]() { return run.done(); };
+  const Status gnss = attachGnss(ekf, c.map, &*pipeline, &v, &out, log);  // evaluate --gps
+  if (!gnss) return R::failure(gnss.error());
   if (!ekf.use_odom_twist) {
     out.info.notes.push_back(
         "use_odom_twist false is not modelled offline: the INS twist is fused");

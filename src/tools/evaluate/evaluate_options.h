@@ -15,6 +15,7 @@ struct EvaluateCommand {
   std::string world;              ///< --world: a label of the simulated world, kept in the summary
   std::string method = "height";  ///< --method: height, reflectivity or fused
   std::string map_poses;  ///< --map-poses: mapping poses + their truth (evaluate_map_frame.h)
+  bool gps = false;       ///< --gps: the EKF fuses the bag's GNSS fixes (mode B: a label)
   BagEvaluationConfig bag;
   RecordedEvaluationConfig recorded;
 };

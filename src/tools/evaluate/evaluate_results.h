@@ -115,6 +115,11 @@ struct RunInfo {
   uint64_t dropped_scans = 0;
   uint64_t ekf_inactive_samples = 0;  ///< sample times at which the filter was not running
   std::string traversal_image;        ///< file name, empty when none
+  /// evaluate --gps: the bag's GNSS fixes were fused by the EKF ("with GPS" in Table I), and
+  /// what became of them.
+  bool gps = false;
+  uint64_t gnss_fixes = 0, gnss_fused = 0, gnss_gated = 0, gnss_refused = 0;
+  uint64_t gnss_filter_not_running = 0;
   std::vector<std::string> notes;
 };
 

@@ -185,7 +185,10 @@ std::string summaryJson(const EvaluationResults& r, const Summary& s) {
     << ",\n  \"ekf_localized\": " << errorJson(s.ekf_localized)
     << ",\n  \"ekf_unlocalized_samples\": " << s.ekf_unlocalized
     << ",\n  \"raw_matches\": " << errorJson(s.raw) << ",\n  \"world\": " << jsonString(i.world)
-    << ",\n  \"method\": " << jsonString(i.method)
+    << ",\n  \"method\": " << jsonString(i.method) << ",\n  \"gps\": " << (i.gps ? "true" : "false")
+    << ",\n  \"gnss_fixes\": {\"received\": " << i.gnss_fixes << ", \"fused\": " << i.gnss_fused
+    << ", \"gated\": " << i.gnss_gated << ", \"refused\": " << i.gnss_refused
+    << ", \"filter_not_running\": " << i.gnss_filter_not_running << "}"
     << ",\n  \"map_poses\": " << jsonString(i.map_poses);
   if (i.map_poses.empty()) {
     o << ",\n  \"ekf_in_map_frame\": null,\n  \"raw_matches_in_map_frame\": null"
@@ -238,12 +241,18 @@ std::string summaryMarkdown(const EvaluationResults& r, const Summary& s) {
   const auto target = targetRms(i.dataset);
   std::ostringstream o;
   o << "## Evaluation: " << i.dataset << (i.world.empty() ? "" : ", " + i.world + " world")
-    << (i.method == "height" ? "" : ", " + i.method + " method") << " ("
-    << (i.mode == "bag" ? "bag read directly" : "recorded replay") << ")\n\n"
+    << (i.method == "height" ? "" : ", " + i.method + " method") << (i.gps ? ", with GPS" : "")
+    << " (" << (i.mode == "bag" ? "bag read directly" : "recorded replay") << ")\n\n"
     << "bag `" << i.bag << "`" << (i.map.empty() ? "" : ", map `" + i.map + "`") << "; "
     << fixed(i.duration_s, 1) << " s of driving, evaluated in " << fixed(i.wall_s, 1) << " s wall";
   if (i.wall_s > 0) o << " (" << fixed(i.duration_s / i.wall_s, 2) << "x real time)";
   o << ".\n\n";
+  if (i.gps) {
+    o << "With GPS (evaluate --gps): " << i.gnss_fixes << " GNSS fixes, " << i.gnss_fused
+      << " fused, " << i.gnss_gated << " rejected by the gate, " << i.gnss_refused
+      << " refused (no solution), " << i.gnss_filter_not_running
+      << " while the filter was not running.\n\n";
+  }
   const std::string no_data = noDataReason(r, s);
   if (!no_data.empty())
     o << "**No data**: " << no_data.substr(std::string("no data: ").size()) << ".\n\n";
