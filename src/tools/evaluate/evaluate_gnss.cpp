@@ -1,6 +1,8 @@
 #include "evaluate/evaluate_gnss.h"
 
+#include <memory>
 #include <ostream>
+#include <sstream>
 
 #include "gmm_localization/core/map/map_format.h"
 
@@ -34,9 +36,36 @@ Status attachGnss(const node::EkfNodeOptions& ekf, const std::string& map_direct
   pipeline->setGeoreference(*georeference);
   out->info.gps = true;
   visitor->gnss_topic = ekf.gnss_topic;
-  visitor->gnss = [pipeline, out](const GnssFix& fix) {
+  // As gnss_initializer:=true on the vehicle: while the filter is not running (no match started
+  // it), the fixes' course over ground gives an initial pose for both nodelets (/initialpose).
+  auto initializer = std::make_shared<GnssInitialPose>(GnssInitialPoseOptions{});
+  const Georeference geo = *georeference;
+  visitor->gnss = [pipeline, out, initializer, geo](const GnssFix& fix) {
     RunInfo& i = out->info;
     ++i.gnss_fixes;
+    if (!pipeline->filter().active()) {
+      auto e = initializer->addFix(geo, fix);
+      if (e) {
+        Pose6 p;
+        p.x = e->x_m;
+        p.y = e->y_m;
+        p.z = e->z_m;
+        p.yaw = e->yaw_rad;
+        Matrix6d c = Matrix6d::Zero();
+        const int idx[3] = {0, 1, 5};
+        for (int a = 0; a < 3; ++a) {
+          for (int b = 0; b < 3; ++b) c(idx[a], idx[b]) = e->cov_xy_yaw(a, b);
+        }
+        if (pipeline->setInitialPose(p, c, e->stamp_s, /*z_known=*/false)) {
+          std::ostringstream note;
+          note.precision(10);
+          note << "GNSS initial pose at t = " << e->stamp_s << " s (" << e->heading_source
+               << "), as gnss_initializer:=true";
+          i.notes.push_back(note.str());
+          initializer->reset();
+        }
+      }
+    }
     const FuseReport r = pipeline->addGnss(fix);
     if (r.fused()) {
       ++i.gnss_fused;

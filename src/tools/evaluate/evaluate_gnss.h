@@ -3,7 +3,9 @@
 // gnss/enabled fuses them (the paper's reflectivity baseline in snow ran "with GPS"). The fixes
 // are placed in the map frame with the map's georeference (its manifest; for a layer directory
 // such as MAP/reflectivity without one, the height map's beside it), and counted in the run's
-// summary.
+// summary. While the EKF is not running (no match started it) the fixes also give it and the
+// matcher an initial pose, as the vehicle's GNSS initializer does (gnss_initializer:=true: course
+// over ground, core/localization/gnss_initial_pose.h).
 
 #include <iosfwd>
 #include <string>
