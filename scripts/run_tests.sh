@@ -8,6 +8,7 @@ source "$(dirname "${BASH_SOURCE[0]}")/env.sh"
 "$GMM_REPO/scripts/check_core_deps.sh"
 "$GMM_REPO/scripts/test_check_core_deps.sh"
 "$GMM_REPO/scripts/check_format.sh"
+/usr/bin/python3 "$GMM_REPO/scripts/check_unity_names.py"
 "$GMM_REPO/scripts/build.sh"
 "$GMM_REPO/scripts/build.sh" tests
 gmm_source_ros

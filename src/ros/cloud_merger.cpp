@@ -10,11 +10,6 @@
 
 namespace gmm_localization {
 namespace node {
-namespace {
-
-double wallNow() { return ros::WallTime::now().toSec(); }
-
-}  // namespace
 
 CloudMerger::CloudMerger(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& name)
     : nh_(nh),

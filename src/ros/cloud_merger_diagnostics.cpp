@@ -8,7 +8,6 @@ namespace node {
 namespace {
 
 using diagnostic_msgs::DiagnosticStatus;
-constexpr double kRecentS = 10.0;  // a problem this recent keeps its WARN
 
 }  // namespace
 
@@ -33,9 +32,9 @@ void CloudMerger::setUpDiagnostics() {
       const double now = ros::WallTime::now().toSec();
       if (in.received == 0) {
         s.summary(DiagnosticStatus::WARN, "no cloud received yet");
-      } else if (now - in.last_error_time_s < kRecentS) {
+      } else if (now - in.last_error_time_s < kRecentProblemS) {
         s.summary(DiagnosticStatus::WARN, in.last_error);
-      } else if (now - in.last_time_problem_s < kRecentS) {
+      } else if (now - in.last_time_problem_s < kRecentProblemS) {
         s.summary(DiagnosticStatus::WARN, "merged scans not deskewed: " + in.last_time_problem);
       }
       lock.unlock();
@@ -56,7 +55,7 @@ void CloudMerger::setUpDiagnostics() {
     s.add("mean merge latency [ms]",
           published_ > 0 ? sum_latency_ms_ / static_cast<double>(published_) : 0.0);
     s.add("max merge latency [ms]", max_latency_ms_);
-    if (ros::WallTime::now().toSec() - last_missing_time_s_ < kRecentS) {
+    if (ros::WallTime::now().toSec() - last_missing_time_s_ < kRecentProblemS) {
       std::string names;
       for (size_t i : last_missing_) names += (names.empty() ? "" : ", ") + inputs_[i]->topic;
       s.add("missing sensors", names);

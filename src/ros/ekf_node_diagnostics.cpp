@@ -10,12 +10,6 @@ namespace gmm_localization {
 namespace node {
 namespace {
 
-std::string fixed(double v, int digits) {
-  char buf[64];
-  std::snprintf(buf, sizeof(buf), "%.*f", digits, v);
-  return buf;
-}
-
 /// Seconds since a wall time, or -1 when never.
 double since(const ros::WallTime& t) {
   return t.isZero() ? -1.0 : (ros::WallTime::now() - t).toSec();

@@ -15,9 +15,6 @@ namespace gmm_localization {
 namespace node {
 namespace {
 
-double wallNow() { return ros::WallTime::now().toSec(); }
-constexpr double kRecentS = 10.0;  // a problem this recent keeps its WARN
-
 /// What the user can do about a refusal.
 std::string withHint(const std::string& reason) {
   if (reason.find("georeference") != std::string::npos) {
@@ -256,7 +253,7 @@ void GnssInitializer::setUpDiagnostics() {
     if (state_ == State::kGaveUp) {
       s.summary(DiagnosticStatus::ERROR, stateName(state_));
     } else if ((state_ == State::kWaiting || state_ == State::kSent) &&
-               wallNow() - last_problem_time_s_ < kRecentS) {
+               wallNow() - last_problem_time_s_ < kRecentProblemS) {
       s.summary(DiagnosticStatus::WARN, last_problem_);
     } else {
       s.summary(DiagnosticStatus::OK, stateName(state_));

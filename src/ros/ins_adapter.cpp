@@ -8,9 +8,6 @@ namespace gmm_localization {
 namespace node {
 namespace {
 
-double wallNow() { return ros::WallTime::now().toSec(); }
-constexpr double kRecentS = 10.0;  // a problem this recent keeps its WARN
-
 std::string describe(const InsConvention& c) {
   return std::string("velocity ") + insVelocityFrameName(c.velocity_frame) + ", body axes " +
          insBodyAxesName(c.body_axes) + ", attitude " + insAttitudeName(c.attitude);
@@ -116,7 +113,7 @@ void InsAdapter::setUpDiagnostics() {
     if (!last_problem_.empty()) s.add("last problem", last_problem_);
     if (received_ == 0) {
       s.summary(DiagnosticStatus::WARN, "no INS odometry received yet");
-    } else if (wallNow() - last_problem_time_s_ < kRecentS) {
+    } else if (wallNow() - last_problem_time_s_ < kRecentProblemS) {
       s.summary(DiagnosticStatus::WARN, last_problem_);
     }
     lock.unlock();

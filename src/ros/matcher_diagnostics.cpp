@@ -10,15 +10,6 @@
 
 namespace gmm_localization {
 namespace node {
-namespace {
-
-std::string fixed(double v, int digits) {
-  char buf[64];
-  std::snprintf(buf, sizeof(buf), "%.*f", digits, v);
-  return buf;
-}
-
-}  // namespace
 
 void Matcher::record(const MatchReport& r, uint32_t dropped) {
   std::lock_guard<std::mutex> lock(stats_mutex_);

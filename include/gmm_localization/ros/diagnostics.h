@@ -12,6 +12,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <cstdio>
 #include <functional>
 #include <memory>
 #include <string>
@@ -23,6 +24,19 @@
 
 namespace gmm_localization {
 namespace node {
+
+/// Wall-clock seconds: diagnostics age problems in wall time, so they keep ageing while a bag's
+/// clock is paused.
+inline double wallNow() { return ros::WallTime::now().toSec(); }
+/// A problem this recent (wall seconds) keeps its WARN in a nodelet's status.
+constexpr double kRecentProblemS = 10.0;
+
+/// A number with `digits` decimals, for a status's values.
+inline std::string fixed(double v, int digits) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.*f", digits, v);
+  return buf;
+}
 
 /// Fills one status: level, message and key-value pairs.
 class StatusBuilder {

@@ -6,7 +6,6 @@
 
 namespace gmm_localization {
 namespace {
-constexpr double kHalfLog2Pi = 0.91893853320467274178;  // 0.5 * ln(2 pi)
 
 double componentLog(const GaussianComponent& c, double z) {
   const double s = static_cast<double>(c.sigma_m);

@@ -10,12 +10,11 @@
 #include <cstring>
 #include <sstream>
 
+#include "gmm_localization/core/common/errno_text.h"
 #include "gmm_localization/core/map/map_format.h"
 
 namespace gmm_localization {
 namespace {
-
-std::string errnoText(int e) { return std::string(std::strerror(e)); }
 
 std::string joinPath(const std::string& dir, const std::string& name) {
   if (dir.empty()) return name;

@@ -8,7 +8,6 @@
 namespace gmm_localization {
 namespace {
 
-using em_detail::kHalfLog2Pi;
 using em_detail::sortPrefix;
 constexpr int kLloydIterations = 20;
 

@@ -11,8 +11,6 @@
 namespace gmm_localization {
 namespace em_detail {
 
-constexpr double kHalfLog2Pi = 0.91893853320467274178;  // 0.5 * ln(2 pi)
-
 /// Insertion sort of the first k entries (k <= 3); std::sort on a std::array prefix trips GCC
 /// 12's -Warray-bounds.
 template <typename T, typename Less>

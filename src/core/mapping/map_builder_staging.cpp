@@ -17,13 +17,13 @@
 #include <sstream>
 #include <vector>
 
+#include "gmm_localization/core/common/errno_text.h"
+
 namespace gmm_localization {
 namespace map_builder {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string errnoText(int e) { return std::string(std::strerror(e)); }
 
 bool pathExists(const std::string& path) {
   struct stat st;

@@ -5,12 +5,12 @@
 #include <cmath>
 #include <limits>
 
+#include "gmm_localization/core/map/gaussian_mixture.h"
 #include "gmm_localization/core/raster/chunk_reach.h"
 
 namespace gmm_localization {
 namespace {
 
-constexpr double kHalfLog2Pi = 0.91893853320467274178;
 // Heights beyond this are treated as corrupt input and ignored when sizing a chunk's z range.
 constexpr double kMaxAbsRasterHeightM = 1.0e4;
 

@@ -13,6 +13,8 @@ namespace gmm_localization {
 /// Largest number of components a cell can hold. The paper (and our default) uses at most two;
 /// three is allowed for dense vegetation experiments.
 constexpr int kMaxMixtureComponents = 3;
+/// 0.5 * ln(2 pi): the normalizer of a 1-D Gaussian's log density.
+constexpr double kHalfLog2Pi = 0.91893853320467274178;
 
 struct GaussianComponent {
   float weight = 0.f;   ///< mixing weight in (0, 1]; a cell's weights sum to 1
