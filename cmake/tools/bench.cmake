@@ -1,8 +1,9 @@
 # bench_registration: the registration benchmark, with PCL NDT and GICP as peers. Its data
-# readers (KITTI-style folders as build_map reads them), peers, options and per-run output are
-# the static library gmm_bench, shared with kitti_check.
+# readers (KITTI-style folders as build_map reads them), match methods, peers, options and
+# per-run output are the static library gmm_bench, shared with kitti_check.
 add_library(gmm_bench STATIC
   src/tools/bench/bench_data.cpp
+  src/tools/bench/bench_methods.cpp
   src/tools/bench/bench_options.cpp
   src/tools/bench/bench_output.cpp
   src/tools/bench/bench_peers.cpp)
@@ -28,4 +29,13 @@ if(CATKIN_ENABLE_TESTING)
     GMM_BUILD_MAP_BINARY="$<TARGET_FILE:build_map>"
     GMM_BENCH_BINARY="$<TARGET_FILE:bench_registration>")
   add_dependencies(tools_bench_registration_test build_map bench_registration)
+  # --methods on a generated painted street: every method's rows, a missing reflectivity layer
+  # and scans without intensity refused.
+  catkin_add_gtest(tools_bench_methods_test test/tools/bench/bench_methods_test.cpp
+    WORKING_DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR})
+  target_link_libraries(tools_bench_methods_test gmm_bench gtest_main)
+  target_compile_definitions(tools_bench_methods_test PRIVATE
+    GMM_BUILD_MAP_BINARY="$<TARGET_FILE:build_map>"
+    GMM_BENCH_BINARY="$<TARGET_FILE:bench_registration>")
+  add_dependencies(tools_bench_methods_test build_map bench_registration)
 endif()

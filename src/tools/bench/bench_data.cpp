@@ -172,9 +172,10 @@ Result<std::vector<BenchScan>> loadScans(const KittiInput& input, int count, Kit
   }
   std::vector<BenchScan> out;
   for (size_t i : chosen) {
-    auto pts = readKittiScan(all[i].path, opened->source.fields);
-    if (!pts.ok()) return R::failure(pts.error());
     BenchScan s;
+    const bool xyzi = opened->source.fields == KittiFields::kXyzi;
+    auto pts = readKittiScan(all[i].path, opened->source.fields, xyzi ? &s.intensity : nullptr);
+    if (!pts.ok()) return R::failure(pts.error());
     s.index = all[i].index;
     s.truth = all[i].map_T_sensor;
     s.points = std::move(pts.value());

@@ -60,6 +60,9 @@ struct BenchScan {
   int index = 0;
   Eigen::Isometry3d truth = Eigen::Isometry3d::Identity();  ///< base_link in map
   PointList points;                                         ///< base_link [m]
+  /// One per point when the records are x,y,z,intensity (the reflectivity and fused
+  /// methods need it), else empty.
+  std::vector<float> intensity;
 };
 
 /// `count` scans evenly spread over the data set's scans that have a file (all when

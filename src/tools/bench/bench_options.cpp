@@ -1,5 +1,7 @@
 #include "bench/bench_options.h"
 
+#include "bench/bench_methods.h"
+
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -39,6 +41,13 @@ const char* benchUsage() {
          "  --track-offset-m M   tracking window (+-2 m, +-3 deg): offsets within M (1.5)\n"
          "  --track-offset-deg D and within +-D degrees (2.5)\n"
          "  --seed N             offset seed (1)\n"
+         "  --methods LIST       match methods timed side by side: height, reflectivity, fused,\n"
+         "                       comma-separated, or all (height: the paper's, always run, the\n"
+         "                       reference). reflectivity and fused read MAP/reflectivity\n"
+         "                       (build_map --layer reflectivity) and need x,y,z,intensity\n"
+         "                       scans; each scan is matched by each method from the same prior,\n"
+         "                       right after its height match: a methods table with the ratios\n"
+         "                       to height (height)\n"
          "  --threads N          also run both windows with the match on N threads (0: one per\n"
          "                       hardware thread): a table of the stages' times on 1 and N\n"
          "                       threads, the speed-ups and whether every result is identical (1:\n"
@@ -150,6 +159,7 @@ bool parseBenchOptions(int argc, char** argv, BenchOptions& o, bool& help) {
       {"--track-offset-m", real(o.track_offset_m, 0.0)},
       {"--track-offset-deg", real(o.track_offset_deg, 0.0)},
       {"--seed", integer(o.seed, 0)},
+      {"--methods", [&o](const char* v) { return parseMethodList(v, &o.methods); }},
       {"--threads", integer(o.threads, 0)},
       {"--peer-target-stride", integer(o.peer_target.stride, 1)},
       {"--peer-target-exclude", integer(o.peer_target.exclude, -1)},

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "bench/bench_data.h"
+#include "gmm_localization/core/localization/match_processor.h"
 #include "gmm_localization/core/matching/registration.h"
 #include "gmm_localization/core/raster/raster_options.h"
 
@@ -32,6 +33,9 @@ struct BenchOptions {
   int global_count = 10;
   int global_threads = 2;  ///< --global-threads: threads the global search's queues run on
   std::vector<double> global_regions_m = {25.0, 50.0, 100.0};
+  /// --methods: the match methods timed side by side; height first and always (the reference
+  /// of the ratios and of the other tables). Others need MAP/reflectivity and xyzi scans.
+  std::vector<MatchMethod> methods = {MatchMethod::kHeight};
   RegistrationOptions reg;
   RasterOptions raster;
 };

@@ -20,6 +20,7 @@
 #include <thread>
 
 #include "bench/bench_data.h"
+#include "bench/bench_methods.h"
 #include "bench/bench_options.h"
 #include "bench/bench_output.h"
 #include "bench/bench_peers.h"
@@ -42,39 +43,6 @@ std::string loadAverage() {
 double now() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
-
-/// What a match returned, compared bit for bit between runs on different thread counts.
-struct MatchKey {
-  std::string failure;  ///< empty when a pose came out
-  int heading_index = 0, tx = 0, ty = 0;
-  int64_t score = 0;
-  double pose[6] = {0, 0, 0, 0, 0, 0};
-  double refined_score = 0.0;
-  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
-  bool certified = false;
-  size_t obstacles = 0;
-  bool operator==(const MatchKey& o) const {
-    return failure == o.failure && heading_index == o.heading_index && tx == o.tx && ty == o.ty &&
-           score == o.score && std::equal(pose, pose + 6, o.pose) &&
-           refined_score == o.refined_score && covariance == o.covariance &&
-           certified == o.certified && obstacles == o.obstacles;
-  }
-};
-
-struct WindowRow {
-  std::string name;
-  std::vector<double> filter_ms, search_ms, filter_search_ms, total_ms, fraction, error_m,
-      error_deg;
-  std::vector<double> refine_ms, covariance_ms, obstacles_ms, certificate_ms;
-  std::vector<double> points, lookups;
-  int certified = 0, certified_wrong = 0;  // certified matches; of them outside success  // search
-                                           // points per heading; evaluations x points
-  int success = 0, runs = 0, equal = 0, compared = 0, failures = 0;
-  std::vector<double> exhaustive_ms;
-  std::vector<ScanRecord> records;  ///< one per scan, for --out
-  std::vector<MatchKey> results;    ///< one per scan, to compare runs on different threads
-  int threads = 1;
-};
 
 std::string fmt(const char* format, double a, double b) {
   char buf[256];
@@ -113,19 +81,28 @@ MatchKey keyOf(const RegistrationResult<MatchResult>& r) {
 
 /// One registration of scan `s` from `req` by `reg`, timed by stage, into `row` (and one record).
 /// Returns the search optimum when the search completed.
+/// `method` (null: height on `reg` and `map`) sets the points, request and maps up as its
+/// method does; that setting-up is timed with the preparation.
 bool matchInto(const Registration& reg, const ChunkMap& map, const BenchScan& s,
-               const MatchRequest& req, const std::string& section, WindowRow& row,
-               SearchOutcome* optimum) {
+               const MatchRequest& request, const std::string& section, WindowRow& row,
+               SearchOutcome* optimum, const MethodMatcher* method = nullptr) {
   ++row.runs;
   row.records.emplace_back();
   ScanRecord& rec = row.records.back();
   rec.section = section;
   rec.window = row.name;
+  rec.matcher = row.matcher;
   rec.scan = s.index;
   rec.raw_points = static_cast<double>(s.points.size());
-  priorError(req.prior, s.truth, rec);
+  priorError(request.prior, s.truth, rec);
   const double t0 = now();
-  auto prepared = reg.prepare(map, s.points, req);
+  MatchRequest req = request;
+  PointList own;
+  FusedChannel channel;
+  const PointList& points = method ? method->input(s, req, own, channel) : s.points;
+  const Registration& registration = method ? method->registration : reg;
+  const ChunkMap& searched = method ? *method->map : map;
+  auto prepared = registration.prepare(searched, points, req);
   if (!prepared.ok()) {
     ++row.failures;
     rec.failure = prepared.error();
@@ -136,7 +113,7 @@ bool matchInto(const Registration& reg, const ChunkMap& map, const BenchScan& s,
   }
   const double t1 = now();
   bool complete = true;
-  const SearchOutcome bb = reg.search(prepared->problem, nullptr, &complete);
+  const SearchOutcome bb = registration.search(prepared->problem, nullptr, &complete);
   const double t2 = now();
   if (!complete) {
     ++row.failures;
@@ -147,10 +124,13 @@ bool matchInto(const Registration& reg, const ChunkMap& map, const BenchScan& s,
     return false;
   }
   if (optimum != nullptr) *optimum = bb;
-  const double n = static_cast<double>(prepared->problem.points(0).size());
+  // Search points per heading (fused: the height points and the ground returns).
+  const double n =
+      static_cast<double>(prepared->problem.points(0).size() + prepared->ground.points.size());
   const double t3 = now();
   RegistrationTiming timing;
-  auto r = reg.finish(map, s.points, req, std::move(prepared.value()), bb, now, &timing);
+  auto r =
+      registration.finish(searched, points, req, std::move(prepared.value()), bb, now, &timing);
   const double t4 = now();
   row.results.push_back(keyOf(r));
   row.refine_ms.push_back(timing.refine_s * 1e3);
@@ -196,9 +176,12 @@ bool matchInto(const Registration& reg, const ChunkMap& map, const BenchScan& s,
 /// Registers every scan from a random offset prior in the window; with `many`, each scan is
 /// registered right after again by a registration on `threads` threads (the same request) into
 /// `many`, so that the two rows see the same machine state, scan by scan.
+/// `methods` (with `matchers`, one each) likewise: each scan by each method from the same request.
 void runWindow(const BenchOptions& o, const ChunkMap& map, const std::vector<BenchScan>& scans,
                double half_m, double half_deg, double off_m, double off_deg, WindowRow& row,
-               const std::string& section = "window", WindowRow* many = nullptr, int threads = 1) {
+               const std::string& section = "window", WindowRow* many = nullptr, int threads = 1,
+               std::vector<WindowRow>* methods = nullptr,
+               const std::vector<MethodMatcher>* matchers = nullptr) {
   RegistrationOptions ro = o.reg;
   ro.threads = 1;
   const Registration reg(ro);
@@ -227,6 +210,9 @@ void runWindow(const BenchOptions& o, const ChunkMap& map, const std::vector<Ben
       checks.push_back({i, req, bb, row.records.size() - 1});
     }
     if (many != nullptr) matchInto(reg_many, map, s, req, "threads", *many, nullptr);
+    for (size_t m = 0; methods != nullptr && m < methods->size(); ++m) {
+      matchInto(reg, map, s, req, "methods", (*methods)[m], nullptr, &(*matchers)[m]);
+    }
   }
   for (const Check& c : checks) {
     auto prepared = reg.prepare(map, scans[c.scan].points, c.request);
@@ -494,10 +480,27 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s\n", store.error().c_str());
     return 1;
   }
+  // The other methods' layer, checked before anything is read (a missing one names build_map).
+  const bool layer_needed = needsReflectivityLayer(o.methods);
+  Result<MapStore> layer_store = Result<MapStore>::failure("not needed");
+  if (layer_needed) {
+    layer_store = openReflectivityLayer(o.map_dir);
+    if (!layer_store.ok()) {
+      std::fprintf(stderr, "%s\n", layer_store.error().c_str());
+      return 1;
+    }
+  }
   KittiScans data;
   auto scans = loadScans(o.scans, o.count, &data);
   if (!scans.ok()) {
     std::fprintf(stderr, "%s\n", scans.error().c_str());
+    return 1;
+  }
+  if (layer_needed && scans->front().intensity.size() != scans->front().points.size()) {
+    std::fprintf(stderr,
+                 "--methods reflectivity / fused need each point's intensity: %s (--point-format "
+                 "xyzi, if the records hold it)\n",
+                 data.layout.c_str());
     return 1;
   }
   KittiScans mapping;
@@ -521,6 +524,29 @@ int main(int argc, char** argv) {
   if (!map.ok()) {
     std::fprintf(stderr, "%s\n", map.error().c_str());
     return 1;
+  }
+  RasterStats layer_stats;
+  Result<ChunkMap> layer_map = Result<ChunkMap>::failure("not needed");
+  std::vector<MethodMatcher> matchers;
+  if (layer_needed) {
+    layer_map =
+        rasterizeAround(layer_store.value(), centres, o.raster_radius_m, o.raster, layer_stats);
+    if (!layer_map.ok()) {
+      std::fprintf(stderr, "%s/reflectivity: %s\n", o.map_dir.c_str(), layer_map.error().c_str());
+      return 1;
+    }
+    const std::string incompatible = channelCompatibility(map.value(), layer_map.value());
+    const bool fused =
+        std::find(o.methods.begin(), o.methods.end(), MatchMethod::kFused) != o.methods.end();
+    if (fused && !incompatible.empty()) {
+      std::fprintf(stderr, "--methods fused: %s and its reflectivity layer differ: %s\n",
+                   o.map_dir.c_str(), incompatible.c_str());
+      return 1;
+    }
+    for (size_t m = 1; m < o.methods.size(); ++m) {
+      matchers.emplace_back(o.methods[m], o.reg, map.value(), &layer_map.value(),
+                            layer_store->reflectivity());
+    }
   }
   Report out;
   std::vector<ScanRecord> records;
@@ -560,12 +586,22 @@ int main(int argc, char** argv) {
   WindowRow* many1 = o.threads != 1 ? &many[1] : nullptr;
   rows[0].name = many[0].name =
       fmt("paper: 25 m x 25 m, +-15 deg (offsets within %g m, %g deg)", o.offset_m, o.offset_deg);
-  runWindow(o, map.value(), scans.value(), 12.5, 15.0, o.offset_m, o.offset_deg, rows[0], "window",
-            many0, o.threads);
   rows[1].name = many[1].name = fmt("tracking: +-2 m, +-3 deg (offsets within %g m, %g deg)",
                                     o.track_offset_m, o.track_offset_deg);
+  // Per window: the other methods' rows (the height row is rows[w]).
+  std::vector<std::vector<WindowRow>> method_rows(2);
+  for (size_t w = 0; w < 2; ++w) {
+    for (const MethodMatcher& m : matchers) {
+      method_rows[w].emplace_back();
+      method_rows[w].back().name = rows[w].name;
+      method_rows[w].back().method = m.method;
+      method_rows[w].back().matcher = std::string("gmm_localization ") + matchMethodName(m.method);
+    }
+  }
+  runWindow(o, map.value(), scans.value(), 12.5, 15.0, o.offset_m, o.offset_deg, rows[0], "window",
+            many0, o.threads, &method_rows[0], &matchers);
   runWindow(o, map.value(), scans.value(), 2.0, 3.0, o.track_offset_m, o.track_offset_deg, rows[1],
-            "window", many1, o.threads);
+            "window", many1, o.threads, &method_rows[1], &matchers);
   out.print("## Search windows\n\n");
   out.print(
       "Offsets: paper window within %g m, +-%g deg (--offset-m, --offset-deg); tracking window "
@@ -581,6 +617,21 @@ int main(int argc, char** argv) {
                              windowJson(rows[0], 12.5, 15.0, o.offset_m, o.offset_deg),
                              windowJson(rows[1], 2.0, 3.0, o.track_offset_m, o.track_offset_deg)});
   for (const WindowRow& r : rows) records.insert(records.end(), r.records.begin(), r.records.end());
+  if (!matchers.empty()) {
+    out.print("\n## Match methods (--methods)\n\n");
+    out.print("reflectivity layer %s/reflectivity: %s; rasterized %zu chunks in %.2f s\n\n",
+              o.map_dir.c_str(), describeReflectivityLayer(layer_store->reflectivity()).c_str(),
+              layer_stats.chunks, layer_stats.seconds);
+    std::vector<std::vector<WindowRow>> table(2);
+    for (size_t w = 0; w < 2; ++w) {
+      table[w].push_back(rows[w]);
+      for (const WindowRow& r : method_rows[w]) {
+        table[w].push_back(r);
+        records.insert(records.end(), r.records.begin(), r.records.end());
+      }
+    }
+    summary.add("methods", printMethods(out, table));
+  }
 
   if (o.threads != 1) {
     // The same scans and priors with the match on N threads, each scan right after its

@@ -193,7 +193,22 @@ TEST(BenchOptions, DefaultsAndNewOptions) {
   EXPECT_EQ(n.out_dir, "o");
   EXPECT_EQ(n.mapping.fields, KittiFields::kXyzi);
 
+  // --methods: height first and always, duplicates once; all = the three.
+  EXPECT_EQ(o.methods, std::vector<MatchMethod>{MatchMethod::kHeight});
+  BenchOptions m;
+  ASSERT_TRUE(parse({"--map", "m", "--scans", "s", "--methods", "fused,reflectivity,fused"}, m));
+  EXPECT_EQ(m.methods, (std::vector<MatchMethod>{MatchMethod::kHeight, MatchMethod::kFused,
+                                                 MatchMethod::kReflectivity}));
+  ASSERT_TRUE(parse({"--map", "m", "--scans", "s", "--methods", "all"}, m));
+  EXPECT_EQ(m.methods, (std::vector<MatchMethod>{MatchMethod::kHeight, MatchMethod::kReflectivity,
+                                                 MatchMethod::kFused}));
+  ASSERT_TRUE(parse({"--map", "m", "--scans", "s", "--methods", "height"}, m));
+  EXPECT_EQ(m.methods, std::vector<MatchMethod>{MatchMethod::kHeight});
+
   BenchOptions bad;
+  EXPECT_FALSE(parse({"--map", "m", "--scans", "s", "--methods", "height,intensity"}, bad));
+  EXPECT_FALSE(parse({"--map", "m", "--scans", "s", "--methods", ""}, bad));
+  EXPECT_FALSE(parse({"--map", "m", "--scans", "s", "--methods", "height,"}, bad));
   EXPECT_FALSE(parse({"--map", "m", "--scans", "s", "--track-offset-m", "x"}, bad));
   EXPECT_FALSE(parse({"--map", "m", "--scans", "s", "--peer-target-stride", "0"}, bad));
   EXPECT_FALSE(parse({"--map", "m", "--scans", "s", "--point-format", "xyzrgb"}, bad));
