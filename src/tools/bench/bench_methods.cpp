@@ -42,9 +42,10 @@ bool needsReflectivityLayer(const std::vector<MatchMethod>& methods) {
 
 Result<MapStore> openReflectivityLayer(const std::string& map_dir) {
   const std::string dir = map_dir + "/reflectivity";
-  const std::string how = "; build it with: build_map --kitti MAPPING_DIR --kitti-fields xyzi "
-                          "--layer reflectivity --output " +
-                          dir + " (the scans the height map was built from)";
+  const std::string how =
+      "; build it with: build_map --kitti MAPPING_DIR --kitti-fields xyzi "
+      "--layer reflectivity --output " +
+      dir + " (the scans the height map was built from)";
   auto store = MapStore::open(dir);
   if (!store.ok()) {
     return Result<MapStore>::failure(
@@ -63,9 +64,8 @@ MethodMatcher::MethodMatcher(MatchMethod m, const RegistrationOptions& height_op
                              const ChunkMap& height_map, const ChunkMap* reflectivity,
                              const ReflectivityLayerOptions& definition)
     : method(m),
-      registration(m == MatchMethod::kReflectivity
-                       ? reflectivityRegistrationOptions(height_options)
-                       : height_options),
+      registration(m == MatchMethod::kReflectivity ? reflectivityRegistrationOptions(height_options)
+                                                   : height_options),
       map(m == MatchMethod::kReflectivity ? reflectivity : &height_map),
       reflectivity_map(reflectivity),
       layer(definition) {}
@@ -134,11 +134,11 @@ std::vector<JsonObject> printMethods(Report& out,
       out.print(
           "| %s | %s | %d | %.0f | %.1f | %.1f / %.1f | %.1f | %.1f / %.1f | %d/%d (%.1f%%) | "
           "%.3f, %.3f / %.3f | %d/%d (%d) | %.2f / %.2f / %.2f | %.2f |\n",
-          window.c_str(), matchMethodName(r.method), r.runs, median(r.points),
-          median(r.filter_ms), median(r.search_ms), percentile(r.search_ms, 99),
-          median(r.refine_ms), median(r.total_ms), percentile(r.total_ms, 99), r.success, r.runs,
-          100.0 * r.success / std::max(1, r.runs), median(r.error_m), median(r.error_deg),
-          percentile(r.error_m, 99), r.certified, r.runs, r.certified_wrong, rs, rr, rt, per_scan);
+          window.c_str(), matchMethodName(r.method), r.runs, median(r.points), median(r.filter_ms),
+          median(r.search_ms), percentile(r.search_ms, 99), median(r.refine_ms), median(r.total_ms),
+          percentile(r.total_ms, 99), r.success, r.runs, 100.0 * r.success / std::max(1, r.runs),
+          median(r.error_m), median(r.error_deg), percentile(r.error_m, 99), r.certified, r.runs,
+          r.certified_wrong, rs, rr, rt, per_scan);
       JsonObject j;
       j.add("window", height.name)
           .add("method", matchMethodName(r.method))

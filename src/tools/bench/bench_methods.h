@@ -44,7 +44,7 @@ struct WindowRow {
   std::vector<double> filter_ms, search_ms, filter_search_ms, total_ms, fraction, error_m,
       error_deg;
   std::vector<double> refine_ms, covariance_ms, obstacles_ms, certificate_ms;
-  std::vector<double> points, lookups;  ///< search points per heading; evaluations x points
+  std::vector<double> points, lookups;     ///< search points per heading; evaluations x points
   int certified = 0, certified_wrong = 0;  ///< certified matches; of them outside success
   int success = 0, runs = 0, equal = 0, compared = 0, failures = 0;
   std::vector<double> exhaustive_ms;
@@ -87,7 +87,8 @@ struct MethodMatcher {
 /// The methods table: for each window, a row per method, with the stages' median times, the
 /// success and the errors against the truth, and the ratios to the height row of that window
 /// (`windows[w][0]`, same scans and priors). Returns the rows as JSON.
-std::vector<JsonObject> printMethods(Report& out, const std::vector<std::vector<WindowRow>>& windows);
+std::vector<JsonObject> printMethods(Report& out,
+                                     const std::vector<std::vector<WindowRow>>& windows);
 
 }  // namespace bench
 }  // namespace gmm_localization

@@ -120,8 +120,8 @@ TEST(BenchMethods, EveryMethodOnTheSameScansAndAMissingLayer) {
   TempDir d("bench_methods_test");
   const std::string seq = d.path + "/seq", map = d.path + "/map", log = d.path + "/log";
   writeDataset(seq, true);
-  const std::string build = std::string(GMM_BUILD_MAP_BINARY) + " --kitti " + seq +
-                            " --kitti-fields xyzi --output ";
+  const std::string build =
+      std::string(GMM_BUILD_MAP_BINARY) + " --kitti " + seq + " --kitti-fields xyzi --output ";
   ASSERT_EQ(runCommand(build + map, log), 0) << readAll(log + ".err");
 
   // The height map alone: the other methods stop before any match, naming the layer's
@@ -140,9 +140,8 @@ TEST(BenchMethods, EveryMethodOnTheSameScansAndAMissingLayer) {
   // Scans without intensity: refused with the reason.
   const std::string xyz = d.path + "/xyz";
   writeDataset(xyz, false);
-  EXPECT_EQ(runCommand(kBench + " --map " + map + " --scans " + xyz + " --methods reflectivity",
-                       log),
-            1);
+  EXPECT_EQ(
+      runCommand(kBench + " --map " + map + " --scans " + xyz + " --methods reflectivity", log), 1);
   EXPECT_NE(readAll(log + ".err").find("intensity"), std::string::npos) << readAll(log + ".err");
 
   // Every method: a row per method and window, every match within 0.5 m and 1 deg.
