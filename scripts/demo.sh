@@ -17,6 +17,8 @@
 #   7. the reflectivity baseline (GMM_DEMO_REFLECTIVITY=1): each map's reflectivity layer
 #      (build_map --layer reflectivity) and every drive matched against it (evaluate
 #      --method reflectivity), the Levinson row of Table I measured instead of quoted;
+#      and (with the Snowy drive) Fig. 2: the snowy drive's own reflectivity layer beside the
+#      map's (scripts/plot_reflectivity_map.py);
 #   8. draws Fig. 8, 9, 10 and Table I (scripts/plot_evaluation.py) and prints Table I.
 #
 # Everything goes to $GMM_DEMO_DIR (default .ws/demo); existing outputs of a stage are reused
@@ -235,6 +237,30 @@ for ds in "${REPLAYS[@]}"; do
   end
 done
 
+if [ "$REFLECTIVITY" = 1 ] && [ "$SNOWY" = 1 ]; then
+  # Fig. 2: the snowy drive's own reflectivity layer (every 2nd scan, placed with the truth) beside
+  # the map's, over the 40 m square with the most lane paint in the map.
+  begin "Fig. 2: reflectivity layer of the snowy drive"
+  fig2_cmd=("$BIN/build_map" --bag "$DEMO/snowy.bag" --every 2 --layer reflectivity
+    --output "$DEMO/reflectivity_snowy" --overwrite --quiet)
+  if fresh "$DEMO/reflectivity_snowy.done" "${fig2_cmd[@]}" &&
+    [ "$DEMO/reflectivity_snowy.done" -nt "$DEMO/snowy.done" ]; then
+    echo "reusing $DEMO/reflectivity_snowy"
+  else
+    rm -f "$DEMO/reflectivity_snowy.done"
+    "${fig2_cmd[@]}" >"$DEMO/build_map_reflectivity_snowy.log" 2>&1 ||
+      { tail -n 20 "$DEMO/build_map_reflectivity_snowy.log"; fail "build_map reflectivity (snowy drive)"; }
+    echo "${fig2_cmd[*]}" >"$DEMO/reflectivity_snowy.done"
+  fi
+  mkdir -p "$DEMO/figures"
+  /usr/bin/python3 "$GMM_REPO/scripts/plot_reflectivity_map.py" "$DEMO/map/reflectivity" \
+    "$DEMO/reflectivity_snowy" --center auto --size 40 \
+    --labels "clear: the map (mapping pass),snow: the snowy drive" \
+    --title "Fig. 2: ground reflectivity, clear and snowy" \
+    --out "$DEMO/figures/fig2_reflectivity_clear_snowy.png"
+  end
+fi
+
 begin "figures and Table I"
 /usr/bin/python3 "$GMM_REPO/scripts/plot_evaluation.py" --out "$DEMO/figures" "${EVAL_DIRS[@]}"
 end
@@ -244,7 +270,8 @@ echo "================ Table I (paper section V) ================"
 cat "$DEMO/figures/table1.md"
 echo
 echo "Figures: $DEMO/figures/fig8_registration.png (Fig. 8), fig9_traversal.png (Fig. 9),"
-echo "         fig10_errors.png (Fig. 10); per-run details: $DEMO/eval_*/summary.md"
+echo "         fig10_errors.png (Fig. 10), fig10_methods_*.png (Fig. 10 by method),"
+echo "         fig2_reflectivity_clear_snowy.png (Fig. 2); per-run details: $DEMO/eval_*/summary.md"
 echo
 echo "Stage times (wall):"
 printf '  %s\n' "${STAGES[@]}"

@@ -10,6 +10,10 @@ traversal.ppm/.json). Writes into FIG_DIR:
   fig9_traversal.png      Fig. 9: one branch-and-bound traversal (layers by heading slice)
   fig10_errors.png        Fig. 10: longitudinal and lateral error of the EKF over time (and the
                           raw matches), one column per dataset
+  fig10_methods_<dataset>.png  Fig. 10 with the methods overlaid: when runs of one dataset,
+                          world and mode used different methods (--method height, reflectivity,
+                          fused) on the same drive, their EKF errors over time in one plot (a
+                          run that never localized is listed as such)
   table1.md               Table I with the paper's numbers side by side
 Uses Debian's python3-matplotlib and python3-numpy only (run with /usr/bin/python3).
 """
@@ -205,6 +209,68 @@ def fig10(runs, path):
     return path
 
 
+METHOD_COLOURS = {"height": "tab:blue", "reflectivity": "tab:red", "fused": "tab:green"}
+
+
+def fig10_methods(runs, out_dir):
+    """One figure per (dataset, world, mode) run with several methods: their EKF errors
+    overlaid (longitudinal and lateral), so the methods compare on the same drive."""
+    groups = {}
+    for r in runs:
+        s = r["summary"]
+        groups.setdefault((s["dataset"], s.get("world", ""), s["mode"]), []).append(r)
+    made = []
+    for (dataset, world, mode), group in sorted(groups.items()):
+        methods = {r["summary"].get("method", "height") for r in group}
+        if len(methods) < 2:
+            continue
+        group.sort(key=lambda r: list(METHOD_COLOURS).index(r["summary"].get("method", "height"))
+                   if r["summary"].get("method", "height") in METHOD_COLOURS else 99)
+        data = [r for r in group if r["ekf"]]
+        bulk = np.concatenate([np.abs(column(r["ekf"], k)) for r in data
+                               for k in ("longitudinal_m", "lateral_m")] or [np.zeros(1)])
+        lim = max(0.1, 1.3 * float(np.percentile(bulk, 99.5)))
+        fig, axes = plt.subplots(2, 1, figsize=(11.0, 6.2), sharex=True)
+        t0 = min((column(r["ekf"], "t")[0] for r in data), default=0.0)
+        for col, (key, name) in enumerate([("longitudinal_m", "longitudinal"),
+                                           ("lateral_m", "lateral")]):
+            ax = axes[col]
+            for r in group:
+                s = r["summary"]
+                method = s.get("method", "height")
+                colour = METHOD_COLOURS.get(method, "tab:gray")
+                if not r["ekf"]:
+                    ax.plot([], [], " ", label="%s: never localized, no EKF output (%s of %s "
+                            "scans accepted)" % (method, s.get("accepted", "?"), s.get("scans", "?")))
+                    continue
+                t, e = column(r["ekf"], "t") - t0, column(r["ekf"], key)
+                late = " (EKF from %.1f s)" % t[0] if t[0] > 0.5 else ""
+                ax.plot(t, np.clip(e, -lim, lim), color=colour, linewidth=1.1,
+                        label="%s: EKF RMS %s, max |error| %s; %s of %s scans accepted%s" % (
+                            method, cm(s["ekf"]["rms_" + key]), cm(float(np.max(np.abs(e)))),
+                            s.get("accepted", "?"), s.get("scans", "?"), late))
+                out = int(np.sum(np.abs(e) > lim))
+                if out:
+                    ax.plot([], [], " ", label="  %d samples beyond +-%.2f m (max %.2f m)"
+                            % (out, lim, float(np.max(np.abs(e)))))
+            ax.axhline(0, color="black", linewidth=0.5)
+            ax.set_ylim(-lim, lim)
+            ax.set_ylabel("%s error [m]" % name)
+            ax.grid(True, alpha=0.3)
+            ax.legend(loc="upper right", fontsize=8)
+        axes[-1].set_xlabel("time [s]")
+        fig.suptitle("Fig. 10 by method: EKF error relative to ground truth, %s drive (%s%s)" % (
+            dataset, "replay" if mode == "recorded" else "offline",
+            ", %s world" % world if world else ""))
+        fig.tight_layout()
+        path = os.path.join(out_dir, "fig10_methods_%s%s.png" % (
+            dataset, "_%s" % world if world and world != "perfect" else ""))
+        fig.savefig(path, dpi=100)
+        plt.close(fig)
+        made.append(path)
+    return made
+
+
 def integrity(runs, path):
     """Stanford-style plot: error against protection level of every registration with a
     certificate (drive matches and Fig. 8), certified in blue, uncertified in grey; points
@@ -357,6 +423,7 @@ def main():
             fig10(runs, os.path.join(a.out, "fig10_errors.png")),
             integrity(offline, os.path.join(a.out, "integrity.png")),
             table1(runs, os.path.join(a.out, "table1.md"))]
+    made += fig10_methods(runs, a.out)
     for m in made:
         if m:
             print("wrote %s" % m)
