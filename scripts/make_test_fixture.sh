@@ -2,6 +2,8 @@
 # Generates the fixture of the vehicle rostests (test/integration/vehicle_*.test) with the
 # repository's own tools, in about 15 s on 2 cores:
 #   OUT/map/                 a map of a small town (build_map on a coarse KITTI mapping pass)
+#   OUT/map/reflectivity/    its reflectivity layer, from the same scans (method:=fused,
+#                            method:=reflectivity)
 #   OUT/drive.bag            a 20 s drive through it (downtown pass: moving cars, changed
 #                            parked cars; a left turn; coarse azimuth, ~110 MB)
 #   OUT/fixture.launch       replay.launch with that bag and map and an initial pose offset from
@@ -35,6 +37,10 @@ rm -rf "$OUT/map" "$OUT/mapping" "$OUT/drive.bag" "$OUT/fixture.launch" "$OUT/fi
 # uses the same origin).
 "$BUILD_MAP" --kitti "$OUT/mapping" --kitti-fields xyzi --output "$OUT/map" --quiet \
   --utm-zone 17N --georef-origin 277000,4686000,250 >/dev/null
+# Its reflectivity layer from the same scans (the fused rostest, vehicle_fused.test).
+"$BUILD_MAP" --kitti "$OUT/mapping" --kitti-fields xyzi --layer reflectivity \
+  --output "$OUT/map/reflectivity" --quiet --utm-zone 17N --georef-origin 277000,4686000,250 \
+  >/dev/null
 rm -rf "$OUT/mapping"
 
 # 2. The drive (1.33 deg azimuth: 4x fewer points than a real HDL-32E, same geometry).
@@ -70,6 +76,7 @@ cat >"$OUT/fixture.launch" <<EOF
   <arg name="exit_at_end" default="false"/>
   <arg name="record" default=""/>
   <arg name="config_dir" default="\$(find gmm_localization)/config"/>
+  <arg name="method" default="height"/>
   <include file="\$(find gmm_localization)/launch/replay.launch">
     <arg name="bag" value="$OUT/drive.bag"/>
     <arg name="map" value="$OUT/map"/>
@@ -84,6 +91,7 @@ cat >"$OUT/fixture.launch" <<EOF
     <arg name="exit_at_end" value="\$(arg exit_at_end)"/>
     <arg name="record" value="\$(arg record)"/>
     <arg name="config_dir" value="\$(arg config_dir)"/>
+    <arg name="method" value="\$(arg method)"/>
   </include>
 </launch>
 EOF

@@ -19,7 +19,9 @@
 #                        a stand-in for robot_localization (wiring, TF, config/robot_localization
 #                        .yaml), and vehicle_ekf_no_tf (same binary): ekf_publish_tf:=false;
 #  - vehicle_ins_adapter: localization.launch ins_adapter:=true ins_driver:=autoware_lvx on a
-#                        drive shaped like that driver's output.
+#                        drive shaped like that driver's output;
+#  - vehicle_fused:      replay.launch method:=fused (two map servers, both layers matched) on
+#                        the first 8 s of the drive.
 find_package(rostest REQUIRED)
 find_package(roslaunch REQUIRED)
 
@@ -31,6 +33,8 @@ roslaunch_add_file_check(launch/localization.launch map:=/tmp/no_map ins_adapter
 roslaunch_add_file_check(launch/localization.launch map:=/tmp/no_map ekf:=false
   prior_topic:=/odometry/filtered gnss_initializer:=true gnss_heading_topic:=/gnss/heading)
 roslaunch_add_file_check(launch/replay.launch map:=/tmp/no_map bag:=/tmp/no.bag)
+roslaunch_add_file_check(launch/localization.launch map:=/tmp/no_map method:=fused
+  use_initial_pose:=true)
 roslaunch_add_file_check(launch/replay.launch map:=/tmp/no_map bag:=/tmp/no.bag
   record:=/tmp/out.bag rviz:=true merge_clouds:=true)
 
@@ -51,7 +55,7 @@ endif()
 set(GMM_VEHICLE_NODELETS gmm_map_server_nodelet gmm_matcher_nodelet gmm_ekf_nodelet
   gmm_cloud_merger_nodelet gmm_gnss_initializer_nodelet gmm_ins_adapter_nodelet)
 foreach(name nodelets replay stale_start robustness kidnap bad_input gnss_start
-    external_filter ins_adapter)
+    external_filter ins_adapter fused)
   add_executable(rostest_vehicle_${name} EXCLUDE_FROM_ALL
     test/integration/vehicle_${name}_test.cpp)
   target_link_libraries(rostest_vehicle_${name} gmm_ros ${GTEST_LIBRARIES})

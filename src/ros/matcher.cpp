@@ -33,14 +33,6 @@ Matcher::Matcher(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& nam
       scan_rate_(0.5 * options_.expected_scan_rate_hz, 2.0 * options_.expected_scan_rate_hz),
       acquisition_(
           AcquisitionWatchOptions{acquisitionWarnAfter(options_.policy.relocalization), 15.0}) {
-  if (options_.method.method == MatchMethod::kFused) {
-    // The matcher receives one layer from one map server; the fused method needs two.
-    throw ConfigError("parameter " + pnh_.resolveName("method") +
-                      " = 'fused' is not supported by the matcher nodelet: it receives one map "
-                      "layer from one map server, the fused method needs the height and the "
-                      "reflectivity layer. The fused method runs offline today: evaluate bag "
-                      "--method fused --map MAP (MAP and MAP/reflectivity)");
-  }
   auto processor = MatchProcessor::create(options_.registration, options_.policy, options_.method);
   if (!processor) throw ConfigError(processor.error());
   processor_ = std::make_unique<MatchProcessor>(std::move(processor).value());
@@ -79,20 +71,33 @@ Matcher::Matcher(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& nam
   initialpose_sub_ = nh_.subscribe("initialpose", 2, &Matcher::onInitialPose, this);
   chunk_sub_ = nh_.subscribe("map_chunks", 512, &Matcher::onChunk, this);
   index_sub_ = nh_.subscribe("map_index", 8, &Matcher::onIndex, this);
+  if (options_.method.method == MatchMethod::kFused) {
+    // The second layer, from a second map server (localization.launch method:=fused).
+    reflectivity_topic_ = nh_.resolveName("reflectivity/map_index");
+    reflectivity_chunk_sub_ =
+        nh_.subscribe("reflectivity/map_chunks", 512, &Matcher::onReflectivityChunk, this);
+    reflectivity_index_sub_ =
+        nh_.subscribe("reflectivity/map_index", 8, &Matcher::onReflectivityIndex, this);
+  }
   global_srv_ = nh_.advertiseService("global_localization", &Matcher::onGlobalLocalization, this);
 
   setupDiagnostics();
   worker_ = std::thread([this] { workerLoop(); });
   global_worker_ = std::thread([this] { globalWorkerLoop(); });
-  ROS_INFO("%s: matching scans in frame '%s' against map '%s'%s", name_.c_str(),
-           options_.base_frame.c_str(), options_.map_frame.c_str(),
-           options_.initial_pose_enabled ? " from the configured initial pose" : "");
+  ROS_INFO(
+      "%s: matching scans in frame '%s' against map '%s'%s%s", name_.c_str(),
+      options_.base_frame.c_str(), options_.map_frame.c_str(),
+      options_.initial_pose_enabled ? " from the configured initial pose" : "",
+      reflectivity_topic_.empty()
+          ? ""
+          : (" (method fused: the reflectivity layer from " + reflectivity_topic_ + ")").c_str());
 }
 
 Matcher::~Matcher() {
   // No callback or diagnostics task may run while the members go away.
   for (ros::Subscriber* sub :
-       {&scan_sub_, &odom_sub_, &posterior_sub_, &initialpose_sub_, &chunk_sub_, &index_sub_}) {
+       {&scan_sub_, &odom_sub_, &posterior_sub_, &initialpose_sub_, &chunk_sub_, &index_sub_,
+        &reflectivity_chunk_sub_, &reflectivity_index_sub_}) {
     sub->shutdown();
   }
   global_srv_.shutdown();

@@ -147,6 +147,11 @@ void Matcher::setupDiagnostics() {
       ignored_indices = map_client_.ignoredIndices() + map_client_.rejectedIndices();
       map_publisher = map_client_.publisher();
     }
+    // Method fused: the second layer (matcher_reflectivity.cpp).
+    const bool fused = options_.method.method == MatchMethod::kFused;
+    bool layers_mismatch = false;
+    const std::string reflectivity_problem =
+        fused ? addReflectivityDiagnostics(s, &layers_mismatch) : "";
     uint64_t dropped_total = 0;
     {
       std::lock_guard<std::mutex> lock(session_mutex_);
@@ -211,6 +216,12 @@ void Matcher::setupDiagnostics() {
       s.summary(
           diagnostic_msgs::DiagnosticStatus::WARN,
           "few matches certified (ambiguous surroundings or a wrong prior): " + last_certificate_);
+    }
+    if (!reflectivity_problem.empty()) {
+      // The layers cannot be searched together: nothing is matched until the maps are fixed.
+      s.summary(layers_mismatch ? diagnostic_msgs::DiagnosticStatus::ERROR
+                                : diagnostic_msgs::DiagnosticStatus::WARN,
+                "method fused: " + reflectivity_problem);
     }
   });
 }

@@ -147,6 +147,7 @@ void Matcher::onIndex(const ros::MessageEvent<const MapIndex>& event) {
     ROS_DEBUG("%s: %zu chunks evicted by the map index", name_.c_str(), dropped);
   }
   map_snapshot_ = std::make_shared<const ChunkMap>(map_client_.chunks());
+  if (options_.method.method == MatchMethod::kFused) checkLayers();
 }
 
 }  // namespace node

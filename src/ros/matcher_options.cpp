@@ -164,8 +164,9 @@ MatchMethodOptions loadMatchMethodOptions(const ParamSource& pnh) {
   if (!parseMatchMethod(method, &o.method)) {
     throw ConfigError("parameter " + pnh.resolveName("method") + " = '" + method +
                       "' must be height (the paper's), reflectivity (the baseline; the map "
-                      "server must serve the map's reflectivity layer) or fused (both summed; "
-                      "evaluate --method fused only)");
+                      "server must serve the map's reflectivity layer) or fused (both summed: "
+                      "the reflectivity layer from a second map server on "
+                      "reflectivity/map_*, localization.launch method:=fused)");
   }
   ReflectivityLayerOptions& r = o.reflectivity;
   r.metres_per_unit = param(pnh, "reflectivity/metres_per_unit", r.metres_per_unit, 1e-4, 1.0);

@@ -194,15 +194,30 @@ void Matcher::processScan(const sensor_msgs::PointCloud2::ConstPtr& msg, uint32_
 void Matcher::runMatch(const sensor_msgs::PointCloud2::ConstPtr& msg, ScanInput scan,
                        const MatchStart& start, uint32_t dropped) {
   std::shared_ptr<const ChunkMap> map;
+  // Method fused: the reflectivity layer, or why it cannot be searched (the scan is then
+  // answered skipped with that reason by the processor, which gets no second map).
+  const bool fused = options_.method.method == MatchMethod::kFused;
+  std::shared_ptr<const ChunkMap> reflectivity;
+  std::string reflectivity_problem;
   {
     std::lock_guard<std::mutex> lock(map_mutex_);
     map = map_snapshot_;
+    if (fused) {
+      reflectivity_problem = reflectivityProblem();
+      if (reflectivity_problem.empty()) reflectivity = reflectivity_snapshot_;
+    }
   }
   static const ChunkMap kEmpty;
   const bool want_traversal = traversal_pub_.getNumSubscribers() > 0;
-  MatchReport report =
-      processor_->process(map ? *map : kEmpty, std::move(scan), start.prior, start.twistOrNull(),
-                          want_traversal, [] { return ros::WallTime::now().toSec(); });
+  MatchReport report = processor_->process(
+      map ? *map : kEmpty, std::move(scan), start.prior, start.twistOrNull(), want_traversal,
+      [] { return ros::WallTime::now().toSec(); }, reflectivity.get());
+  if (fused && !reflectivity && report.outcome == MatchOutcome::kSkipped &&
+      report.reason.rfind("no reflectivity map", 0) == 0) {
+    report.reason = "method fused: " + reflectivity_problem;
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    ++reflectivity_skips_;
+  }
   std::string mode;
   {
     // Discards a match begun before time went backwards; else the tracker learns the outcome.

@@ -17,6 +17,10 @@
 //                    pitch completed from the posterior/INS): wide window around it
 //   map_chunks       gmm_localization/RasterChunk (zero copy via node::fromMsg)
 //   map_index        gmm_localization/MapIndex (latched): protocol of map_server_client.h
+//   reflectivity/map_chunks, reflectivity/map_index  method fused only: the reflectivity layer
+//                    from a second map server (matcher_reflectivity.cpp); until it has arrived,
+//                    or while the two layers cannot be searched together, every scan is
+//                    answered skipped with the reason
 // Published:
 //   pose             geometry_msgs/PoseWithCovarianceStamped, accepted matches, scan stamp, map
 //   status           gmm_localization/MatchStatus, one per processed scan (accepted or why not)
@@ -97,6 +101,16 @@ class Matcher {
   // With the publisher: the client follows one map server and ignores the others.
   void onChunk(const ros::MessageEvent<const RasterChunk>& event);
   void onIndex(const ros::MessageEvent<const MapIndex>& event);
+  // matcher_reflectivity.cpp: the fused method's second layer (a second map server).
+  void onReflectivityChunk(const ros::MessageEvent<const RasterChunk>& event);
+  void onReflectivityIndex(const ros::MessageEvent<const MapIndex>& event);
+  /// Needs map_mutex_: refreshes layer_mismatch_ from both clients' indices.
+  void checkLayers();
+  /// Needs map_mutex_: why the fused method cannot search now (empty: it can).
+  std::string reflectivityProblem() const;
+  /// The second layer's diagnostics lines (method fused); returns its problem (empty: none),
+  /// `mismatch` whether it is that the layers cannot be searched together.
+  std::string addReflectivityDiagnostics(StatusBuilder& s, bool* mismatch);
   // matcher_worker.cpp: scan intake, the worker, one scan's processing.
   void onScan(const sensor_msgs::PointCloud2::ConstPtr& msg);
   void workerLoop();
@@ -130,6 +144,7 @@ class Matcher {
   tf2_ros::TransformListener tf_listener_;
 
   ros::Subscriber scan_sub_, odom_sub_, posterior_sub_, initialpose_sub_, chunk_sub_, index_sub_;
+  ros::Subscriber reflectivity_chunk_sub_, reflectivity_index_sub_;  ///< method fused only
   ros::ServiceServer global_srv_;
   ros::Publisher pose_pub_, status_pub_, obstacles_pub_, classified_pub_, traversal_pub_;
   std::unique_ptr<Diagnostics> diagnostics_;
@@ -155,6 +170,12 @@ class Matcher {
   std::mutex map_mutex_;
   MapServerClient map_client_;
   std::shared_ptr<const ChunkMap> map_snapshot_;
+  // The fused method's reflectivity layer (a second map server): protocol state, snapshot and
+  // why the two layers cannot be searched together (empty: they can, or not both known yet).
+  MapServerClient reflectivity_client_;
+  std::shared_ptr<const ChunkMap> reflectivity_snapshot_;
+  std::string layer_mismatch_;
+  std::string reflectivity_topic_;  ///< resolved reflectivity/map_index
 
   std::thread worker_, global_worker_;
 
@@ -176,6 +197,9 @@ class Matcher {
   uint64_t scans_ = 0, accepted_ = 0, time_resets_ = 0, bad_clouds_ = 0;
   uint64_t time_recalls_ = 0;         ///< resets recovered from the match history
   uint64_t processing_failures_ = 0;  ///< scans whose processing threw (answered all the same)
+  /// Method fused: scans answered skipped because the reflectivity layer was missing or
+  /// could not be searched with the height map.
+  uint64_t reflectivity_skips_ = 0;
   std::string last_reason_;
   double last_ll_per_point_ = 0.0, last_search_ms_ = 0.0, last_total_ms_ = 0.0;
   WindowExtent last_window_;
