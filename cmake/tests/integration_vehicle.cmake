@@ -21,7 +21,8 @@
 #  - vehicle_ins_adapter: localization.launch ins_adapter:=true ins_driver:=autoware_lvx on a
 #                        drive shaped like that driver's output;
 #  - vehicle_fused:      replay.launch method:=fused (two map servers, both layers matched) on
-#                        the first 8 s of the drive.
+#                        the first 8 s of the drive; vehicle_fused_waiting: the matcher's
+#                        answers without a usable reflectivity layer.
 find_package(rostest REQUIRED)
 find_package(roslaunch REQUIRED)
 
@@ -55,7 +56,7 @@ endif()
 set(GMM_VEHICLE_NODELETS gmm_map_server_nodelet gmm_matcher_nodelet gmm_ekf_nodelet
   gmm_cloud_merger_nodelet gmm_gnss_initializer_nodelet gmm_ins_adapter_nodelet)
 foreach(name nodelets replay stale_start robustness kidnap bad_input gnss_start
-    external_filter ins_adapter fused)
+    external_filter ins_adapter fused fused_waiting)
   add_executable(rostest_vehicle_${name} EXCLUDE_FROM_ALL
     test/integration/vehicle_${name}_test.cpp)
   target_link_libraries(rostest_vehicle_${name} gmm_ros ${GTEST_LIBRARIES})
