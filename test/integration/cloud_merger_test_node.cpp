@@ -81,6 +81,11 @@ class CloudMergerRostest : public ::testing::Test {
     while (!connected() && ros::WallTime::now() < end) ros::WallDuration(0.05).sleep();
     ASSERT_TRUE(connected()) << "cloud_merger did not connect";
   }
+  // Before the members the callbacks write: shutdown() waits for a callback in progress.
+  void TearDown() override {
+    sub_.shutdown();
+    diag_sub_.shutdown();
+  }
 
   void onMerged(const sensor_msgs::PointCloud2::ConstPtr& m) {
     std::lock_guard<std::mutex> lock(mutex_);

@@ -111,7 +111,10 @@ class MapServerRostest : public ::testing::Test {
     ASSERT_TRUE(testmap::corruptFile(dir_ + "/" + bad->file_name));
     diag_sub_ = nh_.subscribe("/diagnostics", 100, &MapServerRostest::onDiagnostics, this);
   }
-  void TearDown() override { testmap::removeDirectory(dir_); }
+  void TearDown() override {
+    diag_sub_.shutdown();  // before the members its callback writes (waits for one in progress)
+    testmap::removeDirectory(dir_);
+  }
 
   void onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstPtr& m) {
     std::lock_guard<std::mutex> lock(diag_mutex_);

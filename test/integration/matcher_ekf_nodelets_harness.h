@@ -90,6 +90,11 @@ class Harness {
   ~Harness() {
     stop_ = true;
     thread_.join();
+    // Before the members the callbacks write: shutdown() waits for a callback in progress.
+    for (ros::Subscriber* s : {&pose_sub_, &status_sub_, &odometry_sub_, &diagnostics_sub_,
+                               &diagnostics_agg_sub_, &rosout_sub_}) {
+      s->shutdown();
+    }
   }
 
   /// Sim time now (the clock this node publishes).

@@ -5,10 +5,14 @@
 #include <gtest/gtest.h>
 #include <ros/ros.h>
 
+#include <cstdio>
+
 namespace gmm_localization {
 namespace node {
 
 inline int runRostestMain(int argc, char** argv, const char* node_name) {
+  // Line-buffered: what a test printed survives a crash of the test process.
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
   testing::InitGoogleTest(&argc, argv);
   ros::init(argc, argv, node_name);
   ros::AsyncSpinner spinner(2);

@@ -124,6 +124,13 @@ class Outputs {
       subs_.push_back(nh.subscribe("/ground_truth/odom", 5000, &Outputs::onTruth, this));
     }
   }
+  /// The subscriptions end first: shutdown() waits for a callback in progress, so none runs
+  /// on a member already destroyed (the spinner threads outlive the test case).
+  ~Outputs() {
+    for (ros::Subscriber& s : subs_) s.shutdown();
+  }
+  Outputs(const Outputs&) = delete;
+  Outputs& operator=(const Outputs&) = delete;
 
   template <typename F>
   auto locked(F f) {
