@@ -9,20 +9,12 @@
 
 #include "gmm_localization/core/localization/gnss_position.h"
 #include "gmm_localization/core/localization/localization_filter.h"
+#include "support/test_georeference.h"
 
 namespace gmm_localization {
 namespace {
 
-Georeference georeference() {
-  Georeference g;
-  g.present = true;
-  g.utm_zone = 17;
-  g.utm_north = true;
-  g.origin_easting_m = 277000.0;
-  g.origin_northing_m = 4686000.0;
-  g.origin_up_m = 250.0;
-  return g;
-}
+Georeference georeference() { return testing::simulatorGeoreference(); }
 
 /// A fix of the map point (x, y, z) reporting sigma per horizontal axis.
 GnssFix fixAt(double stamp, double x, double y, double z, double sigma) {

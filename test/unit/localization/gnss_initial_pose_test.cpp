@@ -7,19 +7,12 @@
 
 #include <gtest/gtest.h>
 
+#include "support/test_georeference.h"
+
 namespace gmm_localization {
 namespace {
 
-Georeference georeference() {
-  Georeference g;
-  g.present = true;
-  g.utm_zone = 17;
-  g.utm_north = true;
-  g.origin_easting_m = 277000.0;
-  g.origin_northing_m = 4686000.0;
-  g.origin_up_m = 250.0;
-  return g;
-}
+Georeference georeference() { return testing::simulatorGeoreference(); }
 
 const Eigen::Vector3d kLever(0.8, -0.3, 1.6);  // antenna in base_link
 

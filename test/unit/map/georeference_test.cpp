@@ -5,19 +5,12 @@
 
 #include <gtest/gtest.h>
 
+#include "support/test_georeference.h"
+
 namespace gmm_localization {
 namespace {
 
-Georeference annArbor() {
-  Georeference g;
-  g.present = true;
-  g.utm_zone = 17;
-  g.utm_north = true;
-  g.origin_easting_m = 277000.0;
-  g.origin_northing_m = 4686000.0;
-  g.origin_up_m = 250.0;
-  return g;
-}
+Georeference annArbor() { return testing::simulatorGeoreference(); }
 
 TEST(Georeference, ParsesZoneTexts) {
   for (const char* text : {"17N", "17 n", "UTM 17N", "WGS84 / UTM zone 17N", "EPSG:32617", "32617",
