@@ -18,7 +18,11 @@
 #      (build_map --layer reflectivity) and every drive matched against it (evaluate
 #      --method reflectivity), the Levinson row of Table I measured instead of quoted;
 #      and (with the Snowy drive) Fig. 2: the snowy drive's own reflectivity layer beside the
-#      map's (scripts/plot_reflectivity_map.py);
+#      map's (scripts/plot_reflectivity_map.py); the fused method (GMM_DEMO_FUSED=1: both
+#      layers' likelihoods summed, evaluate --method fused) on every drive; and GPS as the paper
+#      used it for the baseline (GMM_DEMO_GPS=1: the drives carry simulated GNSS fixes, the maps
+#      the simulator's georeference, and the reflectivity method is evaluated once more with
+#      evaluate --gps);
 #   8. draws Fig. 8, 9, 10 and Table I (scripts/plot_evaluation.py) and prints Table I.
 #
 # Everything goes to $GMM_DEMO_DIR (default .ws/demo); existing outputs of a stage are reused
@@ -30,6 +34,8 @@
 #   GMM_DEMO_OFFSETS=100   scans registered from random 10 m offsets per drive (Fig. 8)
 #   GMM_DEMO_IMPERFECT=1   also the imperfect world (0: the perfect-map world only)
 #   GMM_DEMO_REFLECTIVITY=1  also the reflectivity method (0: the paper's height method only)
+#   GMM_DEMO_FUSED=1       also the fused method (height + reflectivity)
+#   GMM_DEMO_GPS=1         also the reflectivity method with GPS (needs GMM_DEMO_REFLECTIVITY=1)
 #   GMM_BUILD_LOCK=FILE    build under `flock FILE` (a build directory shared with others)
 # docs/evaluation.md explains the outputs and lists measured results and stage times.
 set -euo pipefail
@@ -44,6 +50,12 @@ REPLAY_SNOWY="${GMM_DEMO_REPLAY_SNOWY:-0}"
 OFFSETS="${GMM_DEMO_OFFSETS:-100}"
 IMPERFECT="${GMM_DEMO_IMPERFECT:-1}"
 REFLECTIVITY="${GMM_DEMO_REFLECTIVITY:-1}"
+FUSED="${GMM_DEMO_FUSED:-1}"
+GPS="${GMM_DEMO_GPS:-1}"
+[ "$REFLECTIVITY" = 1 ] || GPS=0
+# Where the simulated world sits on the Earth (simulate's defaults): the maps carry it when the
+# drives carry GNSS fixes, so that evaluate --gps can place the fixes in the map.
+GEOREFERENCE=(--utm-zone 17N --georef-origin 277000,4686000,250)
 TOWN=(--town-size 600 --route-length 1200)
 SEGMENT=(--start-offset 200 --duration "$DURATION")
 
@@ -109,7 +121,9 @@ map_world() {  # map_world SUFFIX MAPPING_OPTIONS... : the mapping pass and its 
   fi
   end
   build_layer "$sfx" "" height
-  [ "$REFLECTIVITY" = 1 ] && build_layer "$sfx" /reflectivity reflectivity
+  if [ "$REFLECTIVITY" = 1 ] || [ "$FUSED" = 1 ]; then
+    build_layer "$sfx" /reflectivity reflectivity
+  fi
   return 0
 }
 
@@ -118,6 +132,9 @@ build_layer() {  # build_layer SUFFIX SUBDIR LAYER : one layer of the map of a w
   local out="$DEMO/map$sfx$sub" stamp="$DEMO/map$sfx${sub//\//_}.done"
   local map_cmd=("$BIN/build_map" --kitti "$DEMO/mapping$sfx" --kitti-fields xyzi
     --layer "$layer" --output "$out" --overwrite)
+  # The georeference lives in the height map's manifest (the reflectivity layer inside it
+  # inherits it).
+  [ "$GPS" = 1 ] && [ "$layer" = height ] && map_cmd+=("${GEOREFERENCE[@]}")
   begin "build the $layer map$sfx"
   if fresh "$stamp" "${map_cmd[@]}" && [ "$stamp" -nt "$DEMO/mapping$sfx.done" ]; then
     echo "reusing $out"
@@ -136,6 +153,7 @@ drive() {  # drive DATASET SUFFIX DRIVE_OPTIONS... : a localization drive as a r
   shift 2
   local sim_cmd=("$BIN/simulate" "${TOWN[@]}" --pass "$ds" "${SEGMENT[@]}"
     --bag "$DEMO/$ds$sfx.bag" --quiet "$@")
+  [ "$GPS" = 1 ] && sim_cmd+=(--gnss realistic "${GEOREFERENCE[@]}")
   begin "simulate the $ds$sfx drive (${DURATION} s, rosbag)"
   if fresh "$DEMO/$ds$sfx.done" "${sim_cmd[@]}"; then
     echo "reusing $DEMO/$ds$sfx.bag"
@@ -193,14 +211,21 @@ for ds in "${REPLAYS[@]}"; do
 done
 
 EVAL_DIRS=()
-evaluate_offline() {  # evaluate_offline DATASET SUFFIX WORLD METHOD EVALUATE_OPTIONS...
-  local ds="$1" sfx="$2" world="$3" method="$4"
-  shift 4
-  local name="$ds$sfx" offsets="$OFFSETS"
+evaluate_offline() {  # evaluate_offline DATASET SUFFIX WORLD METHOD GPS EVALUATE_OPTIONS...
+  local ds="$1" sfx="$2" world="$3" method="$4" gps="$5"
+  shift 5
+  local name="$ds$sfx" offsets="$OFFSETS" what="$method method"
   # The reflectivity method's wide searches prune little (in snow about a third of the
-  # exhaustive poses, seconds each): a fifth of the Fig. 8 registrations.
+  # exhaustive poses, seconds each), the fused method's carry both layers: a fifth of the
+  # Fig. 8 registrations. With GPS: the drive only (the registrations do not use the fixes).
   [ "$method" = height ] || { name="${ds}${sfx}_$method"; offsets=$((OFFSETS / 5)); }
-  begin "evaluate $ds offline, $world world, $method method (evaluate bag)"
+  if [ "$gps" = 1 ]; then
+    name="${name}_gps"
+    offsets=0
+    what="$what with GPS"
+    set -- "$@" --gps
+  fi
+  begin "evaluate $ds offline, $world world, $what (evaluate bag)"
   local rc=0
   "$BIN/evaluate" bag --bag "$DEMO/$ds$sfx.bag" --map "$DEMO/map$sfx" --dataset "$ds" \
     --world "$world" --method "$method" --offset-scans "$offsets" --out "$DEMO/eval_$name" \
@@ -217,13 +242,19 @@ evaluate_offline() {  # evaluate_offline DATASET SUFFIX WORLD METHOD EVALUATE_OP
   EVAL_DIRS+=("$DEMO/eval_$name")
   end
 }
-METHODS=(height)
-[ "$REFLECTIVITY" = 1 ] && METHODS+=(reflectivity)
-for method in "${METHODS[@]}"; do
-  for ds in "${DATASETS[@]}"; do evaluate_offline "$ds" "" perfect "$method"; done
+# Each entry: METHOD:GPS.
+RUNS=(height:0)
+[ "$REFLECTIVITY" = 1 ] && RUNS+=(reflectivity:0)
+[ "$GPS" = 1 ] && RUNS+=(reflectivity:1)
+[ "$FUSED" = 1 ] && RUNS+=(fused:0)
+for run in "${RUNS[@]}"; do
+  method="${run%%:*}"
+  gps="${run#*:}"
+  for ds in "${DATASETS[@]}"; do evaluate_offline "$ds" "" perfect "$method" "$gps"; done
   if [ "$IMPERFECT" = 1 ]; then
     for ds in "${DATASETS[@]}"; do
-      evaluate_offline "$ds" _imperfect imperfect "$method" --map-poses "$DEMO/mapping_imperfect"
+      evaluate_offline "$ds" _imperfect imperfect "$method" "$gps" \
+        --map-poses "$DEMO/mapping_imperfect"
     done
   fi
 done

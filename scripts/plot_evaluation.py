@@ -7,13 +7,15 @@ Each EVAL_DIR is an `evaluate` output (summary.json, ekf.csv, matches.csv, offse
 traversal.ppm/.json). Writes into FIG_DIR:
   fig8_registration.png   Fig. 8: histogram of the registration error from random offsets (top)
                           and error against the initial offset (bottom), one column per dataset
+                          (the height method's runs when there are any: the paper's figure;
+                          the other methods' shares are in table1.md)
   fig9_traversal.png      Fig. 9: one branch-and-bound traversal (layers by heading slice)
   fig10_errors.png        Fig. 10: longitudinal and lateral error of the EKF over time (and the
-                          raw matches), one column per dataset
+                          raw matches), one row per run (the height method's when there are any)
   fig10_methods_<dataset>.png  Fig. 10 with the methods overlaid: when runs of one dataset,
                           world and mode used different methods (--method height, reflectivity,
-                          fused) on the same drive, their EKF errors over time in one plot (a
-                          run that never localized is listed as such)
+                          fused; with --gps dashed) on the same drive, their EKF errors over time
+                          in one plot (a run that never localized is listed as such)
   table1.md               Table I with the paper's numbers side by side
 Uses Debian's python3-matplotlib and python3-numpy only (run with /usr/bin/python3).
 """
@@ -49,6 +51,18 @@ def column(rows, key, cast=float):
     return np.array([cast(r[key]) for r in rows], dtype=float)
 
 
+def method_of(summary):
+    """The run's method as Table I names it: "height", "reflectivity", "fused", with " with GPS"
+    when evaluate ran with --gps."""
+    return summary.get("method", "height") + (" with GPS" if summary.get("gps") else "")
+
+
+def paper_figure_runs(runs):
+    """The runs the paper's own figures show: the height method's, when there are any."""
+    height = [r for r in runs if method_of(r["summary"]) == "height"]
+    return height or runs
+
+
 def load(directory):
     with open(os.path.join(directory, "summary.json")) as f:
         summary = json.load(f)
@@ -58,7 +72,8 @@ def load(directory):
         "label": "%s (%s%s%s)" % (
             summary["dataset"], "replay" if summary["mode"] == "recorded" else "offline",
             ", %s world" % summary["world"] if summary.get("world") else "",
-            ", %s method" % summary["method"] if summary.get("method", "height") != "height" else ""),
+            ", %s method%s" % (summary.get("method", "height"), " with GPS" if summary.get("gps") else "")
+            if method_of(summary) != "height" else ""),
         "ekf": read_csv(os.path.join(directory, "ekf.csv")),
         "matches": read_csv(os.path.join(directory, "matches.csv")),
         "offsets": read_csv(os.path.join(directory, "offsets.csv")),
@@ -221,11 +236,12 @@ def fig10_methods(runs, out_dir):
         groups.setdefault((s["dataset"], s.get("world", ""), s["mode"]), []).append(r)
     made = []
     for (dataset, world, mode), group in sorted(groups.items()):
-        methods = {r["summary"].get("method", "height") for r in group}
+        methods = {method_of(r["summary"]) for r in group}
         if len(methods) < 2:
             continue
-        group.sort(key=lambda r: list(METHOD_COLOURS).index(r["summary"].get("method", "height"))
-                   if r["summary"].get("method", "height") in METHOD_COLOURS else 99)
+        group.sort(key=lambda r: (list(METHOD_COLOURS).index(r["summary"].get("method", "height"))
+                                  if r["summary"].get("method", "height") in METHOD_COLOURS
+                                  else 99, bool(r["summary"].get("gps"))))
         data = [r for r in group if r["ekf"]]
         bulk = np.concatenate([np.abs(column(r["ekf"], k)) for r in data
                                for k in ("longitudinal_m", "lateral_m")] or [np.zeros(1)])
@@ -237,15 +253,16 @@ def fig10_methods(runs, out_dir):
             ax = axes[col]
             for r in group:
                 s = r["summary"]
-                method = s.get("method", "height")
-                colour = METHOD_COLOURS.get(method, "tab:gray")
+                method = method_of(s)
+                colour = METHOD_COLOURS.get(s.get("method", "height"), "tab:gray")
+                style = "--" if s.get("gps") else "-"
                 if not r["ekf"]:
                     ax.plot([], [], " ", label="%s: never localized, no EKF output (%s of %s "
                             "scans accepted)" % (method, s.get("accepted", "?"), s.get("scans", "?")))
                     continue
                 t, e = column(r["ekf"], "t") - t0, column(r["ekf"], key)
                 late = " (EKF from %.1f s)" % t[0] if t[0] > 0.5 else ""
-                ax.plot(t, np.clip(e, -lim, lim), color=colour, linewidth=1.1,
+                ax.plot(t, np.clip(e, -lim, lim), color=colour, linewidth=1.1, linestyle=style,
                         label="%s: EKF RMS %s, max |error| %s; %s of %s scans accepted%s" % (
                             method, cm(s["ekf"]["rms_" + key]), cm(float(np.max(np.abs(e)))),
                             s.get("accepted", "?"), s.get("scans", "?"), late))
@@ -336,14 +353,15 @@ def table1(runs, path):
              ("ekf_in_map_frame", "EKF against the truth in the map's frame"),
              ("raw_matches_in_map_frame", "raw matches against the truth in the map's frame"),
              ("map_error", "the map's own error (its poses against their truth)"))
-    groups = [(w, m, mode) for w in worlds for m in ("height", "reflectivity")
+    groups = [(w, m, mode) for w in worlds
+              for m in ("height", "reflectivity", "reflectivity with GPS", "fused")
               for mode in ("bag", "recorded")]
     mode_names = {"bag": "offline (evaluate bag)", "recorded": "replay (rosbag play)"}
     for world, method, mode in groups:
         mode_name = mode_names[mode]
         by_ds = {r["summary"]["dataset"]: r["summary"] for r in runs
                  if r["summary"]["mode"] == mode and r["summary"].get("world", "") == world
-                 and r["summary"].get("method", "height") == method}
+                 and method_of(r["summary"]) == method}
         if not by_ds:
             continue
         name = "%s, %s world" % (mode_name, world) if world else mode_name
@@ -367,7 +385,8 @@ def table1(runs, path):
                               for ds, s in by_ds.items())
             label = "This work" if kind != "map_error" else "Map"
             if method != "height" and kind != "map_error":
-                label = "This work, %s method" % method
+                label = "This work, %s method%s" % (method.replace(" with GPS", ""),
+                                                     " with GPS" if "GPS" in method else "")
             lines.append("| %s, %s, %s | %s | %s |\n" % (
                 label, name, kind_name, " | ".join(cells), rates if kind == "ekf" else "-"))
     lines.append("| Target | 7.5 cm | 5.0 cm | 9.0 cm | 6.0 cm | 10 Hz |\n")
@@ -418,9 +437,9 @@ def main():
                              r["summary"].get("world", "") not in ("", "perfect"),
                              r["summary"]["dataset"] != "downtown"))
     offline = [r for r in runs if r["summary"]["mode"] == "bag"] or runs
-    made = [fig8(offline, os.path.join(a.out, "fig8_registration.png")),
+    made = [fig8(paper_figure_runs(offline), os.path.join(a.out, "fig8_registration.png")),
             fig9(offline, os.path.join(a.out, "fig9_traversal.png")),
-            fig10(runs, os.path.join(a.out, "fig10_errors.png")),
+            fig10(paper_figure_runs(runs), os.path.join(a.out, "fig10_errors.png")),
             integrity(offline, os.path.join(a.out, "integrity.png")),
             table1(runs, os.path.join(a.out, "table1.md"))]
     made += fig10_methods(runs, a.out)

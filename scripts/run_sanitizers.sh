@@ -179,8 +179,10 @@ TSAN_OPTIONS+=":suppressions=$GMM_REPO/scripts/tsan.supp"
 # map builder's code is covered by unit_map_builder_test here. tools_bench_registration_test
 # builds and runs the build_map and bench_registration binaries end to end (with PCL's NDT and
 # GICP peers, the longest compile under ASan); its reader is covered by tools_bench_data_test
-# here and the KITTI reader by the fuzz pass.
-SKIP=(tools_build_map_overwrite_test tools_bench_registration_test)
+# here and the KITTI reader by the fuzz pass. tools_bench_methods_test runs the same binaries
+# end to end for the reflectivity and fused methods; their matchers are covered here by
+# unit_reflectivity_match_test and unit_fused_match_test.
+SKIP=(tools_build_map_overwrite_test tools_bench_registration_test tools_bench_methods_test)
 # The longest tests under the sanitizers, started first so that a pass does not end on one of
 # them alone (clean 2-core run; ASan: registration and pipeline about 25 s, certificate 17 s,
 # kitti_check 12 s, registration errors 10 s, the rest under 7 s; TSan: map builder 14 s, labels
