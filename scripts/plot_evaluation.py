@@ -379,6 +379,8 @@ def table1(runs, path):
                     if (loc and loc["count"] and s[kind][axis] is not None
                             and abs(loc[axis] - s[kind][axis]) > 0.0005):
                         cell += " (%s+)" % cm(loc[axis])  # without not-yet-localized samples
+                    elif loc is not None and not loc["count"] and s[kind][axis] is not None:
+                        cell += " (never localized: sigma > 1 m throughout)"
                     cells.append(cell)
             rates = ", ".join("%s %.1f Hz (%.0f%% of scans)" % (ds, s["match_rate_hz"],
                                                                100 * s["accepted_share"])
@@ -391,7 +393,8 @@ def table1(runs, path):
                 label, name, kind_name, " | ".join(cells), rates if kind == "ekf" else "-"))
     lines.append("| Target | 7.5 cm | 5.0 cm | 9.0 cm | 6.0 cm | 10 Hz |\n")
     lines.append("\n*: with GPS (paper). +: over the EKF samples whose reported sigma is at most "
-                 "1 m (the filter's start-up transient left out). RMS over the evaluated drives; "
+                 "1 m (the filter's start-up transient left out; \"never localized\": no such "
+                 "sample, the EKF ran on the INS from its initial pose). RMS over the evaluated drives; "
                  "the paper's drives are 3.0 km, see each run's summary.md for its length. "
                  "The imperfect world (docs/evaluation.md): a map built from SLAM-like poses, "
                  "map aging and calibration errors; \"in the map's frame\": against the truth "
