@@ -64,6 +64,8 @@ foreach(name nodelets replay stale_start robustness kidnap bad_input gnss_start
     target_link_libraries(rostest_vehicle_${name} yaml-cpp)
   endif()
   target_include_directories(rostest_vehicle_${name} SYSTEM PRIVATE ${GTEST_INCLUDE_DIRS})
+  # test/unit/support: the test helpers shared with the unit tests (test_georeference.h).
+  target_include_directories(rostest_vehicle_${name} PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/test/unit)
   add_dependencies(rostest_vehicle_${name} gmm_vehicle_fixture ${GMM_VEHICLE_NODELETS})
   if(TARGET tests)
     add_dependencies(tests rostest_vehicle_${name})

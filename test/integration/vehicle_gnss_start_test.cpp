@@ -23,6 +23,7 @@
 #include "gmm_localization/MapIndex.h"
 #include "gmm_localization/core/map/georeference.h"
 #include "gmm_localization/ros/map_server_client.h"
+#include "support/test_georeference.h"
 #include "vehicle_test_player.h"
 #include "vehicle_test_support.h"
 
@@ -46,22 +47,11 @@ std::optional<MapIndex> index_msg;
 
 double wallNow() { return ros::WallTime::now().toSec(); }
 
-Georeference fixtureGeoreference() {
-  Georeference g;
-  g.present = true;
-  g.utm_zone = 17;
-  g.utm_north = true;
-  g.origin_easting_m = 277000.0;
-  g.origin_northing_m = 4686000.0;
-  g.origin_up_m = 250.0;
-  return g;
-}
-
 /// Publishes the fix and heading of the truth at bag time `stamp` (+ an extra map offset).
 void publishGnss(const ros::Time& stamp, double extra_x_m = 0.0) {
   const auto truth = player->truth().at(stamp.toSec());
   if (!truth) return;
-  const Georeference g = fixtureGeoreference();
+  const Georeference g = gmm_localization::testing::simulatorGeoreference();
   auto geo = mapToGeodetic(g, truth->x + kBiasEastM + extra_x_m, truth->y + kBiasNorthM, truth->z);
   ASSERT_TRUE(geo.ok()) << geo.error();
   sensor_msgs::NavSatFix fix;
