@@ -57,6 +57,12 @@ def method_of(summary):
     return summary.get("method", "height") + (" with GPS" if summary.get("gps") else "")
 
 
+def method_phrase(method):
+    """"reflectivity with GPS" -> "reflectivity method with GPS" (labels and Table I rows)."""
+    base = method.replace(" with GPS", "")
+    return "%s method%s" % (base, " with GPS" if base != method else "")
+
+
 def paper_figure_runs(runs):
     """The runs the paper's own figures show: the height method's, when there are any."""
     height = [r for r in runs if method_of(r["summary"]) == "height"]
@@ -72,8 +78,7 @@ def load(directory):
         "label": "%s (%s%s%s)" % (
             summary["dataset"], "replay" if summary["mode"] == "recorded" else "offline",
             ", %s world" % summary["world"] if summary.get("world") else "",
-            ", %s method%s" % (summary.get("method", "height"), " with GPS" if summary.get("gps") else "")
-            if method_of(summary) != "height" else ""),
+            ", " + method_phrase(method_of(summary)) if method_of(summary) != "height" else ""),
         "ekf": read_csv(os.path.join(directory, "ekf.csv")),
         "matches": read_csv(os.path.join(directory, "matches.csv")),
         "offsets": read_csv(os.path.join(directory, "offsets.csv")),
@@ -387,14 +392,13 @@ def table1(runs, path):
                               for ds, s in by_ds.items())
             label = "This work" if kind != "map_error" else "Map"
             if method != "height" and kind != "map_error":
-                label = "This work, %s method%s" % (method.replace(" with GPS", ""),
-                                                     " with GPS" if "GPS" in method else "")
+                label = "This work, " + method_phrase(method)
             lines.append("| %s, %s, %s | %s | %s |\n" % (
                 label, name, kind_name, " | ".join(cells), rates if kind == "ekf" else "-"))
     lines.append("| Target | 7.5 cm | 5.0 cm | 9.0 cm | 6.0 cm | 10 Hz |\n")
     lines.append("\n*: with GPS (paper). +: over the EKF samples whose reported sigma is at most "
                  "1 m (the filter's start-up transient left out; \"never localized\": no such "
-                 "sample, the EKF ran on the INS from its initial pose). RMS over the evaluated drives; "
+                 "sample, the filter's sigma stayed above 1 m). RMS over the evaluated drives; "
                  "the paper's drives are 3.0 km, see each run's summary.md for its length. "
                  "The imperfect world (docs/evaluation.md): a map built from SLAM-like poses, "
                  "map aging and calibration errors; \"in the map's frame\": against the truth "
