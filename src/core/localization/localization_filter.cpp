@@ -121,6 +121,21 @@ void keepPending(std::deque<T>& q, const T& m, double span_s) {
 }
 }  // namespace
 
+std::string LocalizationFilter::motionGapAfter(double stamp_s) const {
+  // The oldest kept sample of each input that has any: the motion after stamp_s is known when
+  // both reach back to it (within kMotionGapS). With no IMU or twist at all there is nothing
+  // to replay and nothing missing.
+  double oldest = -std::numeric_limits<double>::infinity();
+  if (!pending_imu_.empty()) oldest = std::max(oldest, pending_imu_.front().stamp_s);
+  if (!pending_twist_.empty()) oldest = std::max(oldest, pending_twist_.front().stamp_s);
+  if (!(oldest > stamp_s + kMotionGapS)) return {};
+  std::ostringstream s;
+  s << "filter not started from this match: its stamp is " << oldest - stamp_s
+    << " s before the oldest kept IMU/twist sample (the motion since is unknown; " << pendingSpanS()
+    << " s are kept, history_length_s); waiting for a newer match";
+  return s.str();
+}
+
 void LocalizationFilter::replayPending(double stamp_s) {
   std::deque<ImuMeasurement> imu;
   std::deque<TwistMeasurement> twist;
@@ -141,7 +156,7 @@ void LocalizationFilter::replayPending(double stamp_s) {
 
 std::vector<FuseReport> LocalizationFilter::addImu(ImuMeasurement imu) {
   if (!active_) {
-    keepPending(pending_imu_, imu, kPendingSpanS);
+    keepPending(pending_imu_, imu, pendingSpanS());
     return {};
   }
   const MeasurementDefaults& d = options_.defaults;
@@ -167,7 +182,7 @@ std::vector<FuseReport> LocalizationFilter::addImu(ImuMeasurement imu) {
 
 FuseReport LocalizationFilter::addTwist(TwistMeasurement twist) {
   if (!active_) {
-    keepPending(pending_twist_, twist, kPendingSpanS);
+    keepPending(pending_twist_, twist, pendingSpanS());
     FuseReport r;
     r.source = MeasurementSource::kTwist;
     r.outcome = FuseOutcome::kRejectedNotInitialized;
@@ -225,6 +240,12 @@ FuseReport LocalizationFilter::addMatch(double stamp_s, const Pose6& pose,
     if (!options_.initialize_from_match) {
       r.outcome = FuseOutcome::kRejectedNotInitialized;
       r.reason = "filter not running and initialize_from_match is off";
+      return r;
+    }
+    const std::string gap = motionGapAfter(stamp_s);
+    if (!gap.empty()) {
+      r.outcome = FuseOutcome::kRejectedTooOld;
+      r.reason = gap;
       return r;
     }
     const Status s = ekf_.reset(toIsometry(pose), covariance, stamp_s);

@@ -112,15 +112,21 @@ class LocalizationFilter {
                                            const FilterPolicyOptions& policy);
 
   /// IMU sample in base_link; zero covariances get the defaults. Empty when inactive; the
-  /// samples of the last kPendingSpanS are then kept and replayed after the stamp of the pose
-  /// that starts the filter (a scan match arrives a few hundred ms after its stamp: without
-  /// the replay the first estimate would stay where the vehicle was then).
+  /// samples of the last pendingSpanS() are then kept and replayed after the stamp of the pose
+  /// that starts the filter (a scan match arrives a few hundred ms after its stamp, a global
+  /// search's seconds after: without the replay the first estimate would stay where the
+  /// vehicle was then).
   std::vector<FuseReport> addImu(ImuMeasurement imu);
   /// INS body twist; a zero covariance gets the defaults. Kept like IMU samples while inactive.
   FuseReport addTwist(TwistMeasurement twist);
 
-  /// How much IMU and twist history is kept while the filter waits for its first pose [s].
-  static constexpr double kPendingSpanS = 2.0;
+  /// How much IMU and twist history is kept while the filter waits for its first pose [s]:
+  /// the Ekf's history_length_s, the oldest a match may be and still be fused when running.
+  double pendingSpanS() const { return ekf_.options().history_length_s; }
+  /// A first match stamped more than this before the oldest kept IMU or twist sample does not
+  /// start the filter (the motion since its scan is unknown): the ekf nodelet's default
+  /// imu_timeout_s, an input silent that long is a dropout [s].
+  static constexpr double kMotionGapS = 0.5;
   /// The map's georeference, which places GNSS fixes in the map frame.
   void setGeoreference(const Georeference& georeference) { georeference_ = georeference; }
   /// The GNSS antenna in base_link (the ekf nodelet's TF), removed with the filter's heading.
@@ -136,7 +142,9 @@ class LocalizationFilter {
   uint64_t gnssRefused() const { return gnss_refused_; }
 
   /// Scan match at stamp_s: pose of base_link in map with its 6x6 covariance (x, y, z, roll,
-  /// pitch, yaw), fused with match_mask (or starting the filter, see the file comment).
+  /// pitch, yaw), fused with match_mask (or starting the filter, see the file comment, and
+  /// then replaying the kept IMU and twist since stamp_s; a match older than those samples
+  /// reach is refused as kRejectedTooOld with the reason).
   FuseReport addMatch(double stamp_s, const Pose6& pose, const Matrix6d& covariance);
   /// /initialpose. z_and_tilt_known false: z, roll, pitch are taken from the running filter (or
   /// get the unknown sigmas). Fails, changing nothing, on a non-finite pose or bad covariance.
@@ -172,6 +180,8 @@ class LocalizationFilter {
   void checkTime(const FuseReport& report);
   Status inflate(FilterEventKind kind, double stamp_s, std::string detail);
   void event(FilterEventKind kind, double stamp_s, std::string detail);
+  /// Why a filter started at stamp_s could not replay the motion since (empty: it can).
+  std::string motionGapAfter(double stamp_s) const;
   /// Feeds the kept IMU and twist samples stamped after stamp_s, in time order, then drops all.
   void replayPending(double stamp_s);
 
