@@ -7,3 +7,26 @@ file(GLOB GMM_TEST_FRAGMENTS CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/cmake
 foreach(fragment ${GMM_TEST_FRAGMENTS})
   include(${fragment})
 endforeach()
+
+# gmm_release_tests: what the test command (scripts/run_tests.sh) builds in this (Release) build -
+# everything of `tests` but the master-free gtests (unit_*, ros_*, tools_*_test) that the ASan
+# pass compiles and runs (scripts/run_sanitizers.sh): the rostests' executables and fixture, and
+# the gtests named in scripts/sanitizer_skip.txt. `make tests` still builds every test.
+if(TARGET tests)
+  file(STRINGS ${CMAKE_CURRENT_SOURCE_DIR}/scripts/sanitizer_skip.txt GMM_SANITIZER_SKIP
+    REGEX "^[a-z]")
+  get_property(GMM_ALL_TEST_TARGETS TARGET tests PROPERTY MANUALLY_ADDED_DEPENDENCIES)
+  set(GMM_RELEASE_TEST_TARGETS)
+  foreach(t ${GMM_ALL_TEST_TARGETS})
+    if(NOT t MATCHES "^(unit|ros|tools)_.*_test$" OR t IN_LIST GMM_SANITIZER_SKIP)
+      list(APPEND GMM_RELEASE_TEST_TARGETS ${t})
+    endif()
+  endforeach()
+  foreach(t ${GMM_SANITIZER_SKIP})
+    if(NOT TARGET ${t})
+      message(FATAL_ERROR "scripts/sanitizer_skip.txt names ${t}, which is no test target")
+    endif()
+  endforeach()
+  add_custom_target(gmm_release_tests)
+  add_dependencies(gmm_release_tests ${GMM_RELEASE_TEST_TARGETS})
+endif()

@@ -4,8 +4,9 @@
 # -fsanitize=... -fno-omit-frame-pointer -O1 -g1 on every target), of the test binaries only
 # (and the libraries they link, not the tools' executables or the nodelets), then runs them:
 #   asan  address,undefined: every gtest that needs no ROS master - test/unit (core, simulator),
-#         test/ros (ROS glue) and test/tools (but two, see SKIP). The first report fails the
-#         test (halt_on_error; UBSan aborts: -fno-sanitize-recover=undefined), leaks included.
+#         test/ros (ROS glue) and test/tools (but those in scripts/sanitizer_skip.txt). The first
+#         report fails the test (halt_on_error; UBSan aborts: -fno-sanitize-recover=undefined),
+#         leaks included. The test command runs these tests only here, not in the Release build.
 #         UBSan runs without its null, alignment, object-size and pointer-overflow checks
 #         (cmake/sanitize.cmake says why).
 #   tsan  thread: the tests that run threads of the core and simulator - the map server engine
@@ -20,7 +21,9 @@
 # empty: none); GMM_JOBS the parallel compile jobs and test runs (default: nproc);
 # GMM_ASAN_CXX and GMM_TSAN_CXX the compilers (clang++-14 and g++ by default, see below);
 # GMM_BUILD_ONLY=1 builds the passes' tests and runs none (scripts/run_tests.sh builds them
-# beside the rostests, then runs this script again, whose builds are then up to date).
+# beside the rostests, then runs this script again, whose builds are then up to date);
+# GMM_TEST_RESULTS=<dir> writes the ASan pass's gtest XML reports there (run_tests.sh: the
+# Release build's test_results, where these tests are not built).
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/env.sh"
 # shellcheck source=job_pool.sh
@@ -102,12 +105,18 @@ first_slow() {
 declare -A TSAN_FILTER=([unit_global_search_test]="GlobalSearch.OnAPoolTheSameOptimumAsOneQueue")
 
 # run_one <pass> <binary>: runs one gtest from the repository root (the tests' working
-# directory), its output in the pass's log directory.
+# directory), its output in the pass's log directory. With GMM_TEST_RESULTS set, the ASan pass
+# also writes gtest's XML report there as gtest-<name>.xml (catkin's name for it), so that
+# catkin_test_results counts these tests beside the Release build's.
 run_one() {
-  local pass="$1" binary="$2" name filter=""
+  local pass="$1" binary="$2" name filter="" output=""
   name="$(basename "$binary")"
   [ "$pass" = tsan ] && filter="${TSAN_FILTER[$name]:-}"
-  if (cd "$GMM_REPO" && GTEST_FILTER="${filter:-*}" "$binary") >"$LOGS/$pass/$name.log" 2>&1; then
+  if [ "$pass" = asan ] && [ -n "${GMM_TEST_RESULTS:-}" ]; then
+    output="xml:$GMM_TEST_RESULTS/gtest-$name.xml"
+  fi
+  if (cd "$GMM_REPO" && GTEST_FILTER="${filter:-*}" GTEST_OUTPUT="$output" "$binary") \
+    >"$LOGS/$pass/$name.log" 2>&1; then
     echo "[sanitizers] $pass OK     $name"
   else
     echo "[sanitizers] $pass FAILED $name ($LOGS/$pass/$name.log):"
@@ -144,7 +153,7 @@ pass() {
   mapfile -t targets < <(grep -vxF -f <(printf '%s\n' "${SKIP[@]}") <<<"$all" | first_slow | sed '/^$/d')
   skipped="$(grep -xF -f <(printf '%s\n' "${SKIP[@]}") <<<"$all" | paste -sd' ' || true)"
   if [ -n "$skipped" ]; then
-    echo "[sanitizers] $name: not run: $skipped (the reason: SKIP in scripts/run_sanitizers.sh)"
+    echo "[sanitizers] $name: not run: $skipped (the reasons: scripts/sanitizer_skip.txt)"
   fi
   if [ "${#targets[@]}" -eq 0 ]; then
     echo "[sanitizers] $name: no test targets found" >&2
@@ -174,15 +183,9 @@ export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1:print_summary=1"
 export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:print_summary=1:print_suppressions=1"
 TSAN_OPTIONS+=":suppressions=$GMM_REPO/scripts/tsan.supp"
 
-# Left out of the ASan pass: tools_build_map_overwrite_test kills build_map child processes at
-# points of a map rewrite; with an instrumented build_map it takes 170 s instead of 32 s, and the
-# map builder's code is covered by unit_map_builder_test here. tools_bench_registration_test
-# builds and runs the build_map and bench_registration binaries end to end (with PCL's NDT and
-# GICP peers, the longest compile under ASan); its reader is covered by tools_bench_data_test
-# here and the KITTI reader by the fuzz pass. tools_bench_methods_test runs the same binaries
-# end to end for the reflectivity and fused methods; their matchers are covered here by
-# unit_reflectivity_match_test and unit_fused_match_test.
-SKIP=(tools_build_map_overwrite_test tools_bench_registration_test tools_bench_methods_test)
+# Left out of the ASan pass (the names and reasons in scripts/sanitizer_skip.txt; the test
+# command runs them in the Release build).
+mapfile -t SKIP < <(grep -E '^[a-z]' "$GMM_REPO/scripts/sanitizer_skip.txt")
 # The longest tests under the sanitizers, started first so that a pass does not end on one of
 # them alone (clean 2-core run; ASan: registration and pipeline about 25 s, certificate 17 s,
 # kitti_check 12 s, registration errors 10 s, the rest under 7 s; TSan: map builder 14 s, labels
