@@ -162,6 +162,21 @@ TEST(VehicleKidnap, DetectedAndRelocalizedWithoutAPersonAndNothingWrongReportedA
       found_heard_s - kidnap_s,
       relocalizing_match ? static_cast<int>(relocalizing_match->global_search) : -1,
       relocalizing_match ? static_cast<int>(relocalizing_match->certified) : -1);
+  if (std::isnan(relocalized_s)) {
+    // What the matcher answered after the kidnap, for the diagnosis (searched scans only).
+    for (const MatchStatus& s : st) {
+      const double t = s.header.stamp.toSec();
+      if (t < kidnap_s - kScanPeriodS || s.search_evaluations == 0) continue;
+      const PoseError e = poseError(truth, t, toPose(s.pose.pose));
+      std::printf(
+          "[vehicle_kidnap]   scan +%.2f s: %s (%s), prior %s, mode %s, window %.1f m, global %d, "
+          "certified %d %s, %.1f m from the truth, latency %.0f ms\n",
+          t - kidnap_s, s.accepted ? "accepted" : "not accepted", s.reason.c_str(),
+          s.prior_source.c_str(), s.prior_mode.c_str(), s.window_half_x_m,
+          static_cast<int>(s.global_search), static_cast<int>(s.certified),
+          s.certificate_failure.c_str(), e.valid() ? e.xy_m : NAN, s.latency_ms);
+    }
+  }
   ASSERT_FALSE(std::isnan(detected_s)) << "the kidnap was never detected";
   EXPECT_LE(detected_s - kidnap_s, kDetectWithinScans * kScanPeriodS + 0.05)
       << "not detected within " << kDetectWithinScans << " scans";
