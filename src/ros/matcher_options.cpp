@@ -59,6 +59,11 @@ RegistrationOptions loadRegistrationOptions(const ParamSource& parent) {
                                         ce.separation_depth_per_point, 0.0, 100.0);
   ce.max_evaluations = static_cast<int64_t>(
       param(nh, "certificate/max_evaluations", static_cast<int>(ce.max_evaluations), 1, 100000000));
+  ce.wide_min_half_xy_m =
+      param(nh, "certificate/wide_min_half_xy_m", ce.wide_min_half_xy_m, 1e-3, 1e4);
+  ce.wide_max_evaluations =
+      static_cast<int64_t>(param(nh, "certificate/wide_max_evaluations",
+                                 static_cast<int>(ce.wide_max_evaluations), 1, 100000000));
   ce.global_max_evaluations =
       static_cast<int64_t>(param(nh, "certificate/global_max_evaluations",
                                  static_cast<int>(ce.global_max_evaluations), 1, 1000000000));

@@ -24,6 +24,8 @@ std::string CertificateOptions::validate() const {
     return "separation_depth_per_point must be in [margin_per_point, 100)";
   }
   if (max_evaluations < 1) return "max_evaluations must be >= 1";
+  if (wide_max_evaluations < 1) return "wide_max_evaluations must be >= 1";
+  if (!(wide_min_half_xy_m > 0.0)) return "wide_min_half_xy_m must be > 0";
   if (global_max_evaluations < 1) return "global_max_evaluations must be >= 1";
   return {};
 }

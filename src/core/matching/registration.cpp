@@ -316,7 +316,9 @@ RegistrationResult<MatchResult> Registration::finishLocal(
   out.covariance_xyh = out.covariance_detail.covariance;
   const double t3c = tick();
   if (timing) timing->covariance_s = t3c - t3;
-  out.certificate = certifyOptimum(prepared.problem, out.search, options_.certificate, pool_.get());
+  CertificateOptions certificate = options_.certificate;
+  certificate.max_evaluations = certificate.budgetFor(request.half_x_m, request.half_y_m);
+  out.certificate = certifyOptimum(prepared.problem, out.search, certificate, pool_.get());
   {
     const Protection p =
         protectionOf(out.certificate, out.search.pose, out.pose, map.geometry().resolution_m,

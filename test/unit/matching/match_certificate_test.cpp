@@ -254,5 +254,24 @@ TEST(MatchCertificate, ACorridorIsNeverCertified) {
   EXPECT_LT(cert.separation_per_point, CertificateOptions().margin_per_point + 1e-9);
 }
 
+TEST(MatchCertificate, WideWindowsGetTheWideBudget) {
+  // The tracking window keeps max_evaluations; the wide window after an initial pose or a
+  // relocalization (12.5 m) gets wide_max_evaluations, from wide_min_half_xy_m on, in x or y.
+  CertificateOptions o;
+  o.max_evaluations = 3000;
+  o.wide_max_evaluations = 30000;
+  o.wide_min_half_xy_m = 5.0;
+  EXPECT_EQ(o.budgetFor(1.5, 1.5), 3000);
+  EXPECT_EQ(o.budgetFor(4.99, 4.99), 3000);
+  EXPECT_EQ(o.budgetFor(5.0, 1.0), 30000);
+  EXPECT_EQ(o.budgetFor(1.0, 12.5), 30000);
+  EXPECT_TRUE(o.validate().empty()) << o.validate();
+  o.wide_max_evaluations = 0;
+  EXPECT_NE(o.validate().find("wide_max_evaluations"), std::string::npos);
+  o.wide_max_evaluations = 30000;
+  o.wide_min_half_xy_m = 0.0;
+  EXPECT_NE(o.validate().find("wide_min_half_xy_m"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace gmm_localization

@@ -32,6 +32,7 @@
 // a small fraction of the search and a flat one (a corridor, a repeating facade) runs into the
 // budget and is reported uncertified ("budget").
 
+#include <algorithm>
 #include <cstdint>
 #include <string>
 
@@ -50,11 +51,25 @@ struct CertificateOptions {
   double separation_depth_per_point = 0.1;
   /// Node scores the certificate may compute (all layers); beyond it: not certified.
   int64_t max_evaluations = 3000;
+  /// Windows at least this wide (half extent in x or y [m]) get wide_max_evaluations instead:
+  /// the wide window after an initial pose or a relocalization (12.5 m), not the tracking window
+  /// (a few metres). Such a search runs once per relocalization, and its certificate decides
+  /// whether the jump is taken (the matcher's require_certificate_wide); a proof stopped at the
+  /// budget sends the localization into the global search, seconds later. The fused method's two
+  /// channels bound less sharply: in snow its first wide proof needed about 10x the tracking
+  /// budget (335 ms with 30000; docs/integrity.md).
+  double wide_min_half_xy_m = 5.0;
+  int64_t wide_max_evaluations = 30000;
   /// The same for the certificate of a global search (global_certificate.h), whose nodes span
   /// heading intervals over a window thousands of times larger.
   int64_t global_max_evaluations = 200000;
 
   std::string validate() const;
+  /// The node budget of a window with these half extents [m].
+  int64_t budgetFor(double half_x_m, double half_y_m) const {
+    return std::max(half_x_m, half_y_m) >= wide_min_half_xy_m ? wide_max_evaluations
+                                                              : max_evaluations;
+  }
 };
 
 /// Why a match is not certified ("" when it is).
