@@ -20,6 +20,18 @@ if(TARGET tests)
   foreach(t ${GMM_ALL_TEST_TARGETS})
     if(NOT t MATCHES "^(unit|ros|tools)_.*_test$" OR t IN_LIST GMM_SANITIZER_SKIP)
       list(APPEND GMM_RELEASE_TEST_TARGETS ${t})
+    else()
+      # The ASan pass finds its tests by file name (<prefix><file name>): a target named
+      # otherwise would run nowhere.
+      get_target_property(test_sources ${t} SOURCES)
+      list(GET test_sources 0 test_source)
+      get_filename_component(test_file ${test_source} NAME_WE)
+      string(REGEX MATCH "^(unit|ros|tools)_" test_prefix ${t})
+      if(NOT t STREQUAL "${test_prefix}${test_file}")
+        message(FATAL_ERROR "test target ${t} is built from ${test_file}: the ASan pass "
+          "(scripts/run_sanitizers.sh) runs the master-free gtests by their file names; name "
+          "the file or the target so that the target is ${test_prefix}<file name>")
+      endif()
     endif()
   endforeach()
   foreach(t ${GMM_SANITIZER_SKIP})

@@ -62,7 +62,7 @@ if(CATKIN_ENABLE_TESTING)
   add_dependencies(tools_build_map_layer_test build_map map_info)
   # The PCD reader against malformed, double-precision, tiled and junk-laden files; PCL only
   # writes fixtures (its binary_compressed writer and LZF compressor).
-  catkin_add_gtest(tools_build_map_pcd_test test/tools/build_map/pcd_reader_test.cpp
+  catkin_add_gtest(tools_build_map_pcd_test test/tools/build_map/build_map_pcd_test.cpp
     WORKING_DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR})
   target_include_directories(tools_build_map_pcd_test SYSTEM PRIVATE ${PCL_INCLUDE_DIRS})
   target_compile_definitions(tools_build_map_pcd_test PRIVATE ${PCL_DEFINITIONS})

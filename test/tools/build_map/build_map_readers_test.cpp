@@ -1,5 +1,5 @@
 // build_map's rosbag input, its command line and the synthetic street (the PCD input is tested
-// in pcd_reader_test.cpp). No ROS master is needed (rosbag files are written and read directly).
+// in build_map_pcd_test.cpp). No ROS master is needed (rosbag files are written and read directly).
 #include <geometry_msgs/TransformStamped.h>
 #include <nav_msgs/Odometry.h>
 #include <rosbag/bag.h>
