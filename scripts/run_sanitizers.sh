@@ -2,7 +2,8 @@
 # The sanitizer pass of the test command (scripts/run_tests.sh calls it): two more builds of the
 # package, each in its own build directory under $GMM_WS with -DGMM_SANITIZE (cmake/sanitize.cmake:
 # -fsanitize=... -fno-omit-frame-pointer -O1 -g1 on every target), of the test binaries only
-# (and the libraries they link, not the tools' executables or the nodelets), then runs them:
+# (and the libraries they link and the two tools some of them run, build_map and map_info; not
+# the other tools or the nodelets), then runs them:
 #   asan  address,undefined: every gtest that needs no ROS master - test/unit (core, simulator),
 #         test/ros (ROS glue) and test/tools (but those in scripts/sanitizer_skip.txt). The first
 #         report fails the test (halt_on_error; UBSan aborts: -fno-sanitize-recover=undefined),

@@ -283,7 +283,7 @@ TEST(LocalizationFilter, LateFirstMatchStartsTheFilterWhereTheVehicleIsNow) {
   // published pose is where the vehicle is when the match arrives, dead-reckoned from the
   // scan with a fresh filter (velocity and twist scale unknown until the replay: under 1 % of
   // the 14-60 m driven), and the matches after it hold it at their accuracy. Before the fix the
-  // filter kept only 2 s of motion and started 16.5 m off after the 6.2 s wait.
+  // filter kept only 2 s of motion and started 16.4 m off after the 6.2 s wait.
   for (double latency : {1.5, 6.2}) {
     DriveStart start;
     start.late_start_s = 30.0;
