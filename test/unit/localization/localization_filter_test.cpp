@@ -126,10 +126,9 @@ DriveResult runDrive(bool estimate_twist_scale, double ins_scale_error, unsigned
   for (int k = 1; k * 0.01 < kDuration; ++k) events.push_back({k * 0.01 + 1e-6, k * 0.01, 1});
   for (int k = 1; k * 0.1 < kDuration - kArrival; ++k) {
     const double stamp = k * 0.1;
-    const double first_arrival = start_mode.late_start_s + start_mode.late_start_latency_s;
     const bool first = late && std::abs(stamp - start_mode.late_start_s) < 1e-9;
     // Before the first match, and while its search runs, no scan is matched.
-    if (late && !first && stamp + kArrival < first_arrival) continue;
+    if (late && !first && stamp + kArrival < kWarmup) continue;
     events.push_back({stamp + (first ? start_mode.late_start_latency_s : kArrival), stamp, 2});
   }
   std::stable_sort(events.begin(), events.end(),
