@@ -53,9 +53,10 @@ void Matcher::warnStuck(const MatchReport& r) {
   char searched[320];
   if (r.prior.lost) {
     std::snprintf(searched, sizeof(searched),
-                  "the global window (+-%.1f m, the full turn: window/global_max_half_xy_m) "
+                  "the global window (+-%.1f m, the full turn; it widens after each search "
+                  "that finds nothing, up to +-%.1f m: window/global_widest_half_xy_m) "
                   "included: the vehicle is probably farther from it than that",
-                  global_m);
+                  r.window.half_x_m, options_.policy.window.global_widest_half_xy_m);
   } else if (lost_after > 0) {
     std::snprintf(searched, sizeof(searched),
                   "after %d rejections in a row (relocalization/lost_after_rejections) it "

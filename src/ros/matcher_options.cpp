@@ -106,6 +106,9 @@ LocalizationPolicyOptions loadLocalizationPolicyOptions(const ParamSource& nh) {
       param(nh, "window/global_max_half_xy_m", w.global_max_half_xy_m, 0.2, 100.0);
   w.global_max_half_heading_rad =
       param(nh, "window/global_max_half_heading_rad", w.global_max_half_heading_rad, 0.0, M_PI);
+  w.global_widen_factor = param(nh, "window/global_widen_factor", w.global_widen_factor, 1.0, 4.0);
+  w.global_widest_half_xy_m =
+      param(nh, "window/global_widest_half_xy_m", w.global_widest_half_xy_m, 0.2, 200.0);
   w.interim_half_xy_m = param(nh, "window/interim_half_xy_m", w.interim_half_xy_m, 0.2, 100.0);
   w.interim_half_heading_rad =
       param(nh, "window/interim_half_heading_rad", w.interim_half_heading_rad, 0.0, 1.6);

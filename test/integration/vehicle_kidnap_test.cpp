@@ -163,10 +163,11 @@ TEST(VehicleKidnap, DetectedAndRelocalizedWithoutAPersonAndNothingWrongReportedA
       relocalizing_match ? static_cast<int>(relocalizing_match->global_search) : -1,
       relocalizing_match ? static_cast<int>(relocalizing_match->certified) : -1);
   if (std::isnan(relocalized_s)) {
-    // What the matcher answered after the kidnap, for the diagnosis (searched scans only).
+    // What the matcher answered after the kidnap, for the diagnosis (all but the scans skipped
+    // while a global search ran).
     for (const MatchStatus& s : st) {
       const double t = s.header.stamp.toSec();
-      if (t < kidnap_s - kScanPeriodS || s.search_evaluations == 0) continue;
+      if (t < kidnap_s - kScanPeriodS || s.reason.rfind("not searched", 0) == 0) continue;
       const PoseError e = poseError(truth, t, toPose(s.pose.pose));
       std::printf(
           "[vehicle_kidnap]   scan +%.2f s: %s (%s), prior %s, mode %s, window %.1f m, global %d, "

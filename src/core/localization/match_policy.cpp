@@ -53,6 +53,9 @@ std::string WindowPolicyOptions::validate() const {
       rangeProblem("window.global_max_half_xy_m", global_max_half_xy_m, wide_half_xy_m, 100.0),
       rangeProblem("window.global_max_half_heading_rad", global_max_half_heading_rad,
                    wide_half_heading_rad, M_PI),
+      rangeProblem("window.global_widen_factor", global_widen_factor, 1.0, 4.0),
+      rangeProblem("window.global_widest_half_xy_m", global_widest_half_xy_m, global_max_half_xy_m,
+                   200.0),
       rangeProblem("window.unknown_z_search_m", unknown_z_search_m, 0.0, 20.0),
       rangeProblem("window.interim_half_xy_m", interim_half_xy_m, 0.2, 100.0),
       rangeProblem("window.interim_half_heading_rad", interim_half_heading_rad, 0.0, 1.6));
@@ -143,6 +146,18 @@ WindowExtent searchWindowFor(const Prior& prior, const WindowPolicyOptions& o) {
   w.half_heading_rad =
       clampSigma(k * sigmaOf(c(2, 2)), o.min_half_heading_rad, o.max_half_heading_rad);
   return w;
+}
+
+double globalHalfExtent(const WindowPolicyOptions& o, int misses) {
+  const double base = o.global_max_half_xy_m;
+  const double widest = std::max(base, o.global_widest_half_xy_m);
+  if (!(o.global_widen_factor > 1.0) || widest <= base || misses <= 0) return base;
+  // Sizes base, base f, base f^2, ... up to the first that reaches the widest (capped there);
+  // a ratio within 0.1% of a power of f does not add a size of its own.
+  const double powers = std::log(widest / base) / std::log(o.global_widen_factor);
+  const int sizes = 1 + std::max(1, static_cast<int>(std::ceil(powers - 1e-3)));
+  const int k = misses % sizes;
+  return std::min(widest, base * std::pow(o.global_widen_factor, k));
 }
 
 std::optional<WindowExtent> explicitPoseWindow(const Eigen::Matrix3d& c,

@@ -131,7 +131,9 @@ bool MatchSessionState::finishMatch(uint64_t epoch, MatchReport* report) {
                         report->prior,
                         report->has_result ? report->result.log_likelihood_per_point : NAN);
   } else if (report->outcome == MatchOutcome::kRejected) {
-    tracker_.onRejected(report->stamp_s, report->prior, report->likelihood_collapsed);
+    tracker_.onRejected(
+        report->stamp_s, report->prior,
+        report->likelihood_collapsed ? Rejection::kLikelihoodCollapse : Rejection::kOther);
   }
   report->mode_after = tracker_.mode();
   return true;

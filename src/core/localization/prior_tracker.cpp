@@ -147,6 +147,8 @@ void PriorTracker::setExplicitPose(const Pose6& pose, double stamp_s, PriorSourc
   consecutive_rejections_ = 0;
   wide_rejections_ = 0;
   collapses_ = 0;
+  global_misses_ = 0;
+  lost_by_rejections_ = false;
 }
 
 Pose6 PriorTracker::completePlanarPose(const Pose6& planar, const OdometryBuffer* odometry,
@@ -275,8 +277,8 @@ Prior PriorTracker::widenIfLost(Prior p) const {
   const WindowPolicyOptions& w = options_.window;
   p.lost = true;
   p.wide = true;
-  p.wide_window =
-      WindowExtent{w.global_max_half_xy_m, w.global_max_half_xy_m, w.global_max_half_heading_rad};
+  const double half = globalHalfExtent(w, global_misses_);
+  p.wide_window = WindowExtent{half, half, w.global_max_half_heading_rad};
   return p;
 }
 
@@ -314,6 +316,8 @@ void PriorTracker::onAccepted(double stamp_s, const Pose6& pose,
   consecutive_rejections_ = 0;
   wide_rejections_ = 0;
   collapses_ = 0;
+  global_misses_ = 0;
+  lost_by_rejections_ = false;
   // A match that started before the global search was asked for does not end it.
   if (used.lost) global_requested_ = false;
   if (has_explicit_ && used.explicit_generation != explicit_generation_) return;
@@ -321,13 +325,22 @@ void PriorTracker::onAccepted(double stamp_s, const Pose6& pose,
   relocalizing_ = false;
 }
 
-void PriorTracker::onRejected(double stamp_s, const Prior& used, bool collapsed) {
+void PriorTracker::onRejected(double stamp_s, const Prior& used, Rejection why) {
   ++consecutive_rejections_;
-  collapses_ = collapsed ? collapses_ + 1 : 0;
+  collapses_ = why == Rejection::kLikelihoodCollapse ? collapses_ + 1 : 0;
+  if (used.lost && !used.interim) {
+    global_misses_ = global_misses_ < 1000000 ? global_misses_ + 1 : 0;
+  }
   if (consecutive_rejections_ >= options_.relocalization.max_consecutive_rejections) {
     relocalizing_ = true;
   }
   if (used.wide && !used.lost) ++wide_rejections_;
+  const RelocalizationPolicyOptions& o = options_.relocalization;
+  if ((o.lost_after_rejections > 0 && consecutive_rejections_ >= o.lost_after_rejections) ||
+      (o.lost_after_wide_rejections > 0 && wide_rejections_ >= o.lost_after_wide_rejections) ||
+      (o.lost_after_collapses > 0 && collapses_ >= o.lost_after_collapses)) {
+    lost_by_rejections_ = true;
+  }
   // The pending explicit pose moves with the vehicle: from now on it is the pose this search
   // was centred on, at this scan's stamp (a configured pose, valid at any time until now, is
   // thereby taken as the pose of the first scan searched around it). Carried from there by
@@ -363,19 +376,15 @@ void PriorTracker::reset() {
   consecutive_rejections_ = 0;
   wide_rejections_ = 0;
   collapses_ = 0;
+  global_misses_ = 0;
+  lost_by_rejections_ = false;
   recent_ll_.clear();
   distrust_posterior_ = false;
 }
 
 bool PriorTracker::lost() const { return global_requested_ || lostByRejections(); }
 
-bool PriorTracker::lostByRejections() const {
-  const int n = options_.relocalization.lost_after_rejections;
-  const int n_wide = options_.relocalization.lost_after_wide_rejections;
-  const int n_collapse = options_.relocalization.lost_after_collapses;
-  return (n > 0 && consecutive_rejections_ >= n) || (n_wide > 0 && wide_rejections_ >= n_wide) ||
-         (n_collapse > 0 && collapses_ >= n_collapse);
-}
+bool PriorTracker::lostByRejections() const { return lost_by_rejections_; }
 
 PriorMode PriorTracker::mode() const {
   const bool has_prior = has_explicit_ || has_posterior_ || has_match_;

@@ -112,15 +112,22 @@ TEST(PriorTracker, CollapsesInARowMakeItLostAtOnceAndTheReferenceIsTheMedian) {
   EXPECT_DOUBLE_EQ(p.recent_log_likelihood_per_point, -0.5);
 
   // Two collapses and a rejection for another reason: the count starts again.
-  t.onRejected(0.6, p, true);
-  t.onRejected(0.7, p, true);
-  t.onRejected(0.8, p, false);
-  t.onRejected(0.9, p, true);
-  t.onRejected(1.0, p, true);
+  t.onRejected(0.6, p, Rejection::kLikelihoodCollapse);
+  t.onRejected(0.7, p, Rejection::kLikelihoodCollapse);
+  t.onRejected(0.8, p, Rejection::kOther);
+  t.onRejected(0.9, p, Rejection::kLikelihoodCollapse);
+  t.onRejected(1.0, p, Rejection::kLikelihoodCollapse);
   EXPECT_NE(t.mode(), PriorMode::kLost);
-  t.onRejected(1.0, p, true);
+  t.onRejected(1.0, p, Rejection::kLikelihoodCollapse);
   EXPECT_EQ(t.mode(), PriorMode::kLost);
   EXPECT_TRUE(t.priorAt(1.0, &odom).lost);
+  // A global search that finds nothing (rejected for another reason than a collapse) leaves it
+  // lost: the collapses are not undone, the next search is a global one again.
+  for (int k = 0; k < 3; ++k) {
+    t.onRejected(1.0, t.priorAt(1.0, &odom), Rejection::kOther);
+    EXPECT_EQ(t.mode(), PriorMode::kLost) << k;
+    EXPECT_TRUE(t.priorAt(1.0, &odom).lost) << k;
+  }
 
   // A global match found the vehicle: tracking, the reference restarts from that match.
   const Prior global = t.priorAt(1.0, &odom);

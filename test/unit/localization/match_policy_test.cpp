@@ -359,12 +359,13 @@ TEST(PriorTracker, ARejectedExplicitPoseFollowsTheOdometryAndIsLostAfterWideReje
     EXPECT_EQ(t.mode(), i >= 3 ? PriorMode::kLost : PriorMode::kRelocalizing) << ts;
     t.onRejected(ts, p);
   }
-  // A global window rejected: still lost, still carried.
+  // A global window rejected: still lost, still carried, the next global window widened.
   for (; k * 0.01 <= scans[4] + 1e-9; ++k) odom.add(odomAt(k * 0.01, 10.0));
   Prior p = t.priorAt(scans[4], &odom);
   EXPECT_TRUE(p.lost);
   EXPECT_NEAR(p.pose.x, 100.0 + 10.0 * (scans[4] - scans[0]), 1e-6);
-  EXPECT_NEAR(p.wide_window.half_x_m, o.window.global_max_half_xy_m, 1e-12);
+  EXPECT_NEAR(p.wide_window.half_x_m, o.window.global_max_half_xy_m * o.window.global_widen_factor,
+              1e-9);
   // A match of an older explicit pose does not re-anchor a newer one.
   const Prior older = p;
   Pose6 clicked;
@@ -642,6 +643,30 @@ TEST(ExplicitPoseWindow, OnlyACoarseFixWidensTheSearch) {
   EXPECT_FALSE(explicitPoseWindow(Eigen::Vector3d(-1.0, 1.0, 1.0).asDiagonal(), o));
   o.global_max_half_xy_m = 5.0;  // below the wide window
   EXPECT_FALSE(o.validate().empty());
+}
+
+TEST(GlobalHalfExtent, WidensByTheFactorUpToTheWidestThenCycles) {
+  WindowPolicyOptions o;  // 50 m, factor 1.4142, widest 100 m: 50, 70.7, 100 (99.998), 50, ...
+  ASSERT_EQ(o.validate(), "");
+  const double expected[] = {50.0, 70.71, 99.998, 50.0, 70.71, 99.998, 50.0};
+  for (int k = 0; k < 7; ++k) EXPECT_NEAR(globalHalfExtent(o, k), expected[k], 1e-3) << k;
+  // The widest between two powers: capped there, one size of its own.
+  o.global_widest_half_xy_m = 80.0;
+  EXPECT_NEAR(globalHalfExtent(o, 1), 70.71, 1e-3);
+  EXPECT_DOUBLE_EQ(globalHalfExtent(o, 2), 80.0);
+  EXPECT_DOUBLE_EQ(globalHalfExtent(o, 3), 50.0);
+  // Never widened: factor 1, or the widest not above the first.
+  o.global_widen_factor = 1.0;
+  for (int k = 0; k < 4; ++k) EXPECT_DOUBLE_EQ(globalHalfExtent(o, k), 50.0) << k;
+  o.global_widen_factor = 2.0;
+  o.global_widest_half_xy_m = 50.0;
+  for (int k = 0; k < 4; ++k) EXPECT_DOUBLE_EQ(globalHalfExtent(o, k), 50.0) << k;
+  // Validation names the keys.
+  o.global_widest_half_xy_m = 40.0;  // below global_max_half_xy_m
+  EXPECT_NE(o.validate().find("global_widest_half_xy_m"), std::string::npos);
+  o.global_widest_half_xy_m = 100.0;
+  o.global_widen_factor = 0.5;
+  EXPECT_NE(o.validate().find("global_widen_factor"), std::string::npos);
 }
 
 }  // namespace

@@ -406,6 +406,58 @@ TEST(MatchSession, AGlobalSearchRequestedSearchesTheGlobalWindowUntilAMatchOfItI
   EXPECT_FALSE(s.beginMatch(a).prior.lost);
 }
 
+// A kidnapped vehicle's dead-reckoned centre drifts away from it at its own speed: each global
+// search that finds nothing widens the next one (twice the area) up to the widest, then the
+// cycle starts again (a search stopped at its budget may have missed a vehicle inside); an
+// accepted match or a given pose starts again from global_max_half_xy_m.
+TEST(MatchSession, EachGlobalSearchThatFindsNothingWidensTheNextOneInACycle) {
+  LocalizationPolicyOptions policy;
+  policy.window.global_max_half_xy_m = 50.0;
+  policy.window.global_widen_factor = 1.5;
+  policy.window.global_widest_half_xy_m = 100.0;
+  Session s(MatchSessionOptions(), policy);
+  s.setConfiguredPose(poseAt(5.0, 5.0, 0.0), true);
+  const ScanInput a = scanAt(10.0);
+  MatchStart start = s.beginMatch(a);
+  MatchReport r = acceptedReport(a, start, 0.0, 0.0);
+  ASSERT_TRUE(s.finishMatch(start.epoch, &r));
+  ASSERT_EQ(s.requestGlobalSearch(), "");
+  auto rejectGlobal = [&]() {
+    start = s.beginMatch(a);
+    EXPECT_TRUE(start.prior.lost);
+    EXPECT_DOUBLE_EQ(start.prior.wide_window.half_y_m, start.prior.wide_window.half_x_m);
+    EXPECT_DOUBLE_EQ(start.prior.wide_window.half_heading_rad,
+                     policy.window.global_max_half_heading_rad);
+    EXPECT_DOUBLE_EQ(start.prior.pose.x, 5.0);  // the same centre
+    MatchReport rejected = reportWith(a, start, MatchOutcome::kRejected);
+    EXPECT_TRUE(s.finishMatch(start.epoch, &rejected));
+    return start.prior.wide_window.half_x_m;
+  };
+  EXPECT_DOUBLE_EQ(rejectGlobal(), 50.0);
+  EXPECT_DOUBLE_EQ(rejectGlobal(), 75.0);
+  EXPECT_DOUBLE_EQ(rejectGlobal(), 100.0);  // 112.5 capped
+  EXPECT_DOUBLE_EQ(rejectGlobal(), 50.0);   // and again
+  EXPECT_DOUBLE_EQ(rejectGlobal(), 75.0);
+  EXPECT_EQ(s.tracker().globalMisses(), 5);
+  // Interim searches while a global one runs are not global ones: they never widen it.
+  const MatchStart interim = s.beginMatch(a, /*global_available=*/false);
+  EXPECT_TRUE(interim.prior.interim);
+  MatchReport rejected = reportWith(a, interim, MatchOutcome::kRejected);
+  ASSERT_TRUE(s.finishMatch(interim.epoch, &rejected));
+  EXPECT_EQ(s.tracker().globalMisses(), 5);
+  // Found: the next global search starts from global_max_half_xy_m again.
+  start = s.beginMatch(a);
+  EXPECT_DOUBLE_EQ(start.prior.wide_window.half_x_m, 100.0);
+  r = acceptedReport(a, start, 0.0, 0.0);
+  ASSERT_TRUE(s.finishMatch(start.epoch, &r));
+  EXPECT_EQ(s.tracker().globalMisses(), 0);
+  ASSERT_EQ(s.requestGlobalSearch(), "");
+  EXPECT_DOUBLE_EQ(rejectGlobal(), 50.0);
+  // So does a given pose.
+  s.setConfiguredPose(poseAt(9.0, 5.0, 0.0), true);
+  EXPECT_EQ(s.tracker().globalMisses(), 0);
+}
+
 TEST(MatchSession, WhileAGlobalSearchRunsALostPriorIsInterimOrSkipped) {
   LocalizationPolicyOptions policy;
   policy.window.global_max_half_xy_m = 40.0;

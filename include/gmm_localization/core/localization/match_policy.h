@@ -45,6 +45,15 @@ struct WindowPolicyOptions {
   /// docs/benchmarks.md), and far longer on real scans over a partial map.
   double global_max_half_xy_m = 50.0;         ///< [m]
   double global_max_half_heading_rad = M_PI;  ///< [rad]
+  /// While lost, each global search that finds nothing (its window may not hold the vehicle:
+  /// the dead-reckoned centre of a kidnapped vehicle drifts away from it at the vehicle's
+  /// speed) widens the next one: half extent x this factor (1.4142: twice the area), up to
+  /// global_widest_half_xy_m [m]; after the widest, global_max_half_xy_m again and so on
+  /// (globalHalfExtent), since a search that stops at its node budget may have missed a vehicle
+  /// inside its window as well. Back to global_max_half_xy_m when a match is accepted or a pose
+  /// is given. Factor 1: never widened.
+  double global_widen_factor = 1.4142;
+  double global_widest_half_xy_m = 100.0;
   /// While a global search runs (in its own worker), the other scans are searched around the
   /// prior in at most this window (Prior::interim), so that they are answered at the tracking
   /// rate instead of waiting for it [m], [rad].
@@ -228,6 +237,11 @@ struct Prior {
 /// prior's standard deviation per axis (x, y in the map frame; yaw), each clamped to [min, max].
 /// Non-finite sigmas give the maximum.
 WindowExtent searchWindowFor(const Prior& prior, const WindowPolicyOptions& options);
+
+/// The half extent [m] of a lost matcher's global window after `misses` global searches that
+/// found nothing: global_max_half_xy_m x global_widen_factor^k, capped at
+/// global_widest_half_xy_m, where k = misses modulo the number of sizes in that cycle.
+double globalHalfExtent(const WindowPolicyOptions& options, int misses);
 
 /// The window for an explicit pose with (x, y, yaw) covariance `covariance_xyh`: the wide
 /// window (nullopt) unless sigma_multiplier x sigma exceeds wide_half_xy_m (then that extent,

@@ -16,14 +16,18 @@
 //   kRelocalizing  the wide window (WindowPolicyOptions::wide_*), centred on the explicit pose
 //                  while one is pending (carried by odometry from the last scan searched around
 //                  it, onRejected), else on the tracking centre.
-//   kLost          the global window (WindowPolicyOptions::global_max_*) around the same centre.
+//   kLost          the global window (WindowPolicyOptions::global_max_*) around the same centre,
+//                  widened after each global search that found nothing (globalHalfExtent).
 // Transitions:
 //   setExplicitPose (/initialpose, configured pose)           -> kRelocalizing around it
 //   requestRelocalization (relocalize service)                -> kRelocalizing
 //   max_consecutive_rejections rejected matches in a row      -> kRelocalizing
 //   lost_after_rejections rejected in a row, or lost_after_wide_rejections rejected wide
 //   windows in a row, or lost_after_collapses likelihood collapses in a row, or
-//   requestRelocalization(true)                               -> kLost (global window)
+//   requestRelocalization(true)                               -> kLost (global window), kept
+//                                                                whatever the next rejections
+//                                                                are, until one of these two:
+//   setExplicitPose                                           -> kRelocalizing
 //   onAccepted                                                -> kTracking (explicit pose done,
 //                                                                unless a newer one is pending)
 //   reset (time went backwards)                               -> kNoPrior
@@ -101,6 +105,12 @@ struct PosteriorEstimate {
 };
 
 enum class PriorMode { kNoPrior, kTracking, kRelocalizing, kLost };
+
+/// Why a search that ran was not accepted, as far as the prior tracker cares.
+enum class Rejection {
+  kOther,               ///< any reason but the one below
+  kLikelihoodCollapse,  ///< the likelihood-collapse rule (counts towards lost_after_collapses)
+};
 /// "no_prior", "tracking", "relocalizing", "lost"
 const char* priorModeName(PriorMode mode);
 /// The mode of a priorModeName() text; none for any other text.
@@ -147,8 +157,9 @@ class PriorTracker {
   /// problems and "no prior" do not count). A pending explicit pose that `used` came from is
   /// re-anchored at stamp_s to the pose `used` carried it to (when carried by odometry, or when
   /// it had no stamp): the explicit pose follows the vehicle's odometry while it is searched.
-  /// collapsed: rejected by the likelihood-collapse rule (counts towards lost_after_collapses).
-  void onRejected(double stamp_s, const Prior& used, bool collapsed = false);
+  /// A rejected global search (used.lost, not interim) widens the next global window
+  /// (globalHalfExtent).
+  void onRejected(double stamp_s, const Prior& used, Rejection why = Rejection::kOther);
   /// Forgets everything (time went backwards) except the match history.
   void reset();
   /// After a reset: when an accepted match of the history lies within
@@ -163,9 +174,12 @@ class PriorTracker {
   /// requested (requestRelocalization(true)); until a match is accepted.
   bool lost() const;
   /// lost() by the rejections (not only by a global search asked for): the estimate itself is
-  /// not trusted.
+  /// not trusted. Once reached it holds until a match is accepted or a pose is given (a
+  /// rejection of another kind does not undo the likelihood collapses that made it lost).
   bool lostByRejections() const;
   int consecutiveRejections() const { return consecutive_rejections_; }
+  /// Global searches rejected since the last accepted match or given pose (globalHalfExtent).
+  int globalMisses() const { return global_misses_; }
   bool hasPosterior() const { return has_posterior_; }
   const LocalizationPolicyOptions& options() const { return options_; }
   const PosteriorEstimate& posterior() const { return posterior_; }
@@ -205,6 +219,8 @@ class PriorTracker {
   int consecutive_rejections_ = 0;
   int wide_rejections_ = 0;          ///< rejected in a row with a wide (not global) window
   int collapses_ = 0;                ///< rejected in a row by the likelihood-collapse rule
+  int global_misses_ = 0;            ///< see globalMisses()
+  bool lost_by_rejections_ = false;  ///< see lostByRejections()
   std::deque<double> recent_ll_;     ///< log-likelihoods per point of the recent accepted matches
   bool distrust_posterior_ = false;  ///< a jump accepted, no tracking match from the EKF since
 };
