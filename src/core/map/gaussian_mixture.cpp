@@ -122,19 +122,49 @@ bool GaussianMixture1D::operator==(const GaussianMixture1D& o) const {
   return true;
 }
 
-double MixtureLogTerms::logLikelihood(double z_m) const {
-  if (count == 0) return -std::numeric_limits<double>::infinity();
-  double t[kMaxMixtureComponents];
-  double peak = -std::numeric_limits<double>::infinity();
+bool MixtureLogTerms::logTerms(double z_m, double* t, double* peak) const {
+  *peak = -std::numeric_limits<double>::infinity();
+  int top = 0;
   for (int j = 0; j < count; ++j) {
     const double d = (z_m - mean[j]) * inv_sigma[j];
     t[j] = log_norm[j] - 0.5 * d * d;
-    peak = std::max(peak, t[j]);
+    if (t[j] > *peak) {
+      *peak = t[j];
+      top = j;
+    }
   }
-  if (count == 1 || !std::isfinite(peak)) return peak;
+  if (count == 1 || !std::isfinite(*peak)) return true;
+  // exp(-40) = 4.2e-18: two such terms, summed before or after the peak's exp(0) = 1, leave
+  // the double sum at exactly 1 (half an ulp of 1 is 1.1e-16), and log(1) = 0.
+  constexpr double kNegligible = -40.0;
+  for (int j = 0; j < count; ++j) {
+    if (j != top && t[j] - *peak >= kNegligible) return false;
+  }
+  return true;
+}
+
+double MixtureLogTerms::logSumExp(const double* t, double peak) const {
   double sum = 0.0;
   for (int j = 0; j < count; ++j) sum += std::exp(t[j] - peak);
   return peak + std::log(sum);
+}
+
+double MixtureLogTerms::logLikelihood(double z_m) const {
+  if (count == 0) return -std::numeric_limits<double>::infinity();
+  double t[kMaxMixtureComponents], peak;
+  if (logTerms(z_m, t, &peak)) return peak;
+  return logSumExp(t, peak);
+}
+
+double MixtureLogTerms::flooredLogLikelihood(double z_m, double floor) const {
+  if (count == 0) return floor;
+  double t[kMaxMixtureComponents], peak;
+  if (logTerms(z_m, t, &peak)) return std::max(floor, peak);
+  // The sum of at most three terms of at most 1 each: the value is at most peak + log(3)
+  // (1.0986); below the floor by more than that (with room for rounding) it is the floor.
+  static_assert(kMaxMixtureComponents <= 3, "the bound below is log(3)");
+  if (peak + 1.1 < floor) return floor;
+  return std::max(floor, logSumExp(t, peak));
 }
 
 }  // namespace gmm_localization

@@ -32,8 +32,7 @@ double ExactScorer::floored(const CellIndex& c, double z) const {
   const int mask = chunk->cells() - 1;
   const MixtureLogTerms& g =
       chunk->logTerms(static_cast<int>(c.x & mask), static_cast<int>(c.y & mask));
-  if (g.count == 0) return floor_;
-  return std::max(floor_, g.logLikelihood(z));
+  return g.flooredLogLikelihood(z, floor_);
 }
 
 double ExactScorer::cellLogLikelihood(const Eigen::Vector3d& p) const {
@@ -68,7 +67,7 @@ double ExactScorer::pointLogLikelihood(const Eigen::Vector3d& p) const {
       for (int kx = 0; kx < 3; ++kx) {
         const MixtureLogTerms& t =
             chunk->logTerms(static_cast<int>(lx + kx - 1), static_cast<int>(ly + ky - 1));
-        ll[ky * 3 + kx] = t.count == 0 ? floor_ : std::max(floor_, t.logLikelihood(z));
+        ll[ky * 3 + kx] = t.flooredLogLikelihood(z, floor_);
       }
     }
   } else {

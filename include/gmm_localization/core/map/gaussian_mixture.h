@@ -104,7 +104,20 @@ struct MixtureLogTerms {
   MixtureLogTerms() = default;
   explicit MixtureLogTerms(const GaussianMixture1D& g);
   /// Same value as GaussianMixture1D::logLikelihood (to float precision); -inf when empty.
+  /// The exp and the log are skipped when every other component is negligible beside the
+  /// nearest (the sum is then exactly 1): the same value, bit for bit, as computing them.
   double logLikelihood(double z_m) const;
+  /// max(floor, logLikelihood(z_m)), bit for bit, without the exp and the log when the nearest
+  /// component alone puts the mixture below the floor (its log-density + log(count) < floor).
+  double flooredLogLikelihood(double z_m, double floor) const;
+
+ private:
+  /// The components' log-densities at z_m into t, their maximum into *peak; true when the
+  /// mixture's value is *peak exactly (one component, a non-finite peak, or every other term
+  /// below exp(-40): added to the peak's 1 they change no bit of the sum).
+  bool logTerms(double z_m, double* t, double* peak) const;
+  /// peak + log(sum of exp(t_j - peak)), the terms summed in component order.
+  double logSumExp(const double* t, double peak) const;
 };
 
 }  // namespace gmm_localization
