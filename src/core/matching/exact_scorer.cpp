@@ -39,24 +39,32 @@ double ExactScorer::cellLogLikelihood(const Eigen::Vector3d& p) const {
   return floored(map_.geometry().cellAt(p.x(), p.y()), p.z());
 }
 
+namespace {
+/// The cell of map-frame (x, y) and the offset from its centre, in cells.
+struct CellOffset {
+  int64_t cx, cy;
+  double fx, fy;
+};
+CellOffset cellOffset(const MapGeometry& g, double x, double y) {
+  const double u = (x - g.origin_x_m) / g.resolution_m;
+  const double v = (y - g.origin_y_m) / g.resolution_m;
+  const double fu = std::floor(u), fv = std::floor(v);
+  return {static_cast<int64_t>(fu), static_cast<int64_t>(fv), u - fu - 0.5, v - fv - 0.5};
+}
+}  // namespace
+
 double ExactScorer::pointLogLikelihood(const Eigen::Vector3d& p) const {
   // Gaussian-weighted mean of the floored log-likelihoods of the 3 x 3 cells around the point,
   // weights exp(-d^2 / (2 s^2)) of the distance d from the point to each cell centre: smooth in
   // x, y, and unbiased for structure between cell centres (a bilinear interpolation peaks at
   // cell centres and pulls walls onto them). The weights are separable: w = wx * wy.
-  const MapGeometry& g = map_.geometry();
-  const double u = (p.x() - g.origin_x_m) / g.resolution_m;
-  const double v = (p.y() - g.origin_y_m) / g.resolution_m;
-  const double fu = std::floor(u), fv = std::floor(v);
-  const int64_t cx = static_cast<int64_t>(fu), cy = static_cast<int64_t>(fv);
-  const double fx = u - fu - 0.5, fy = v - fv - 0.5;  // offset from the cell centre, in cells
-  double wx[3], wy[3];
-  for (int k = 0; k < 3; ++k) {
-    wx[k] = kernel(fx - (k - 1));
-    wy[k] = kernel(fy - (k - 1));
-  }
-  const double z = p.z();
+  const CellOffset c = cellOffset(map_.geometry(), p.x(), p.y());
   double ll[9];
+  blockLogLikelihoods(c.cx, c.cy, p.z(), ll);
+  return weightedMean(c.fx, c.fy, ll);
+}
+
+void ExactScorer::blockLogLikelihoods(int64_t cx, int64_t cy, double z, double ll[9]) const {
   const MapChunk* chunk = window_.chunk(cx, cy);
   const int64_t mask = chunk != nullptr ? chunk->cells() - 1 : 0;
   const int64_t lx = cx & mask, ly = cy & mask;
@@ -74,6 +82,14 @@ double ExactScorer::pointLogLikelihood(const Eigen::Vector3d& p) const {
     for (int ky = 0; ky < 3; ++ky) {
       for (int kx = 0; kx < 3; ++kx) ll[ky * 3 + kx] = floored({cx + kx - 1, cy + ky - 1}, z);
     }
+  }
+}
+
+double ExactScorer::weightedMean(double fx, double fy, const double ll[9]) const {
+  double wx[3], wy[3];
+  for (int k = 0; k < 3; ++k) {
+    wx[k] = kernel(fx - (k - 1));
+    wy[k] = kernel(fy - (k - 1));
   }
   double acc = 0.0, wsum = 0.0;
   for (int ky = 0; ky < 3; ++ky) {
@@ -94,15 +110,13 @@ double ExactScorer::kernel(double d) const {
   return kernel_table_[i] + a * (kernel_table_[i + 1] - kernel_table_[i]);
 }
 
-double ExactScorer::score(const PointList& base_points, const Pose6& pose, TaskPool* pool) const {
-  const Eigen::Isometry3d T = toIsometry(pose);
-  const size_t blocks = (base_points.size() + kBlockPoints - 1) / kBlockPoints;
+template <typename PointValue>
+double ExactScorer::blockSums(size_t points, TaskPool* pool, const PointValue& value) const {
+  const size_t blocks = (points + kBlockPoints - 1) / kBlockPoints;
   auto block_sum = [&](size_t b) {
     double sum = 0.0;
-    const size_t end = std::min(base_points.size(), (b + 1) * kBlockPoints);
-    for (size_t i = b * kBlockPoints; i < end; ++i) {
-      sum += pointLogLikelihood(T * base_points[i].cast<double>());
-    }
+    const size_t end = std::min(points, (b + 1) * kBlockPoints);
+    for (size_t i = b * kBlockPoints; i < end; ++i) sum += value(i);
     return sum;
   };
   double partial[16];
@@ -117,6 +131,41 @@ double ExactScorer::score(const PointList& base_points, const Pose6& pose, TaskP
   double total = 0.0;
   for (size_t b = 0; b < blocks; ++b) total += sums[b];
   return total;
+}
+
+double ExactScorer::score(const PointList& base_points, const Pose6& pose, TaskPool* pool) const {
+  const Eigen::Isometry3d T = toIsometry(pose);
+  return blockSums(base_points.size(), pool,
+                   [&](size_t i) { return pointLogLikelihood(T * base_points[i].cast<double>()); });
+}
+
+double ExactScorer::scoreReusing(const PointList& base_points, const Pose6& pose,
+                                 const std::vector<CellBlockMemo>* reuse,
+                                 std::vector<CellBlockMemo>* out, TaskPool* pool) const {
+  Pose6 tilt;
+  tilt.roll = pose.roll;
+  tilt.pitch = pose.pitch;
+  const Eigen::Matrix3d R_tilt = toIsometry(tilt).linear();
+  const double c = std::cos(pose.yaw), s = std::sin(pose.yaw);
+  const bool can_reuse = reuse != nullptr && reuse->size() == base_points.size();
+  out->resize(base_points.size());
+  const MapGeometry& g = map_.geometry();
+  return blockSums(base_points.size(), pool, [&](size_t i) {
+    const Eigen::Vector3d q = R_tilt * base_points[i].cast<double>();
+    const double z = q.z() + pose.z;
+    const CellOffset o =
+        cellOffset(g, c * q.x() - s * q.y() + pose.x, s * q.x() + c * q.y() + pose.y);
+    CellBlockMemo& m = (*out)[i];
+    if (can_reuse && (*reuse)[i].cx == o.cx && (*reuse)[i].cy == o.cy && (*reuse)[i].z == z) {
+      m = (*reuse)[i];
+    } else {
+      m.cx = o.cx;
+      m.cy = o.cy;
+      m.z = z;
+      blockLogLikelihoods(o.cx, o.cy, z, m.ll);
+    }
+    return weightedMean(o.fx, o.fy, m.ll);
+  });
 }
 
 }  // namespace gmm_localization

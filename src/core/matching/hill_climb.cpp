@@ -45,9 +45,11 @@ double& coord(Pose6& p, int a) {
 }
 }  // namespace
 
-/// One pattern search from `start`, constrained to the box around `centre`.
-HillClimbOutcome climb(const std::function<double(const Pose6&)>& score, const Pose6& start,
-                       const Pose6& centre, const HillClimbOptions& o) {
+/// One pattern search from `start`, constrained to the box around `centre`; `kept` (optional)
+/// is told each time the climb moves to the pose just scored.
+HillClimbOutcome climb(const std::function<double(const Pose6&)>& score,
+                       const std::function<void()>& kept, const Pose6& start, const Pose6& centre,
+                       const HillClimbOptions& o) {
   const std::array<double, kAxes> limit = {
       o.max_xy_m, o.max_xy_m, o.max_z_m, o.max_roll_pitch_rad, o.max_roll_pitch_rad, o.max_yaw_rad};
   std::array<double, kAxes> step = {o.initial_xy_step_m,      o.initial_xy_step_m,
@@ -59,6 +61,7 @@ HillClimbOutcome climb(const std::function<double(const Pose6&)>& score, const P
   HillClimbOutcome out;
   out.pose = start;
   out.score_start = out.score = score(start);
+  if (kept) kept();
   out.evaluations = 1;
   Pose6 start_copy = centre;
   bool any_step_left = true;
@@ -77,6 +80,7 @@ HillClimbOutcome climb(const std::function<double(const Pose6&)>& score, const P
         if (s > out.score) {
           out.score = s;
           out.pose = trial;
+          if (kept) kept();
           improved = true;
           break;
         }
@@ -110,30 +114,40 @@ PointList thinEvenly(const PointList& points, size_t max_points) {
 
 HillClimbOutcome hillClimb(const ExactScorer& scorer, const PointList& base_points,
                            const Pose6& start, const HillClimbOptions& o, TaskPool* pool) {
+  // Per point set: the cells read at the pose the climb stands on, and at the pose scored last.
+  struct Memo {
+    std::vector<CellBlockMemo> kept, last;
+  } full_memo, coarse_memo;
   ClimbObjective f;
-  f.full = [&](const Pose6& p) { return scorer.score(base_points, p, pool); };
+  f.full = [&](const Pose6& p) {
+    return scorer.scoreReusing(base_points, p, &full_memo.kept, &full_memo.last, pool);
+  };
+  f.full_kept = [&] { full_memo.kept.swap(full_memo.last); };
   PointList coarse;
   if (o.coarse_points > 0 && base_points.size() >= 2 * o.coarse_points) {
     coarse = thinEvenly(base_points, o.coarse_points);
-    f.coarse = [&](const Pose6& p) { return scorer.score(coarse, p, pool); };
+    f.coarse = [&](const Pose6& p) {
+      return scorer.scoreReusing(coarse, p, &coarse_memo.kept, &coarse_memo.last, pool);
+    };
+    f.coarse_kept = [&] { coarse_memo.kept.swap(coarse_memo.last); };
   }
   return hillClimb(f, start, o);
 }
 
 HillClimbOutcome hillClimb(const ClimbObjective& f, const Pose6& start, const HillClimbOptions& o) {
-  if (!f.coarse) return climb(f.full, start, start, o);
+  if (!f.coarse) return climb(f.full, f.full_kept, start, start, o);
   HillClimbOptions first = o;
   first.min_xy_step_m *= 4.0;
   first.min_z_step_m *= 4.0;
   first.min_angle_step_rad *= 4.0;
-  const HillClimbOutcome c = climb(f.coarse, start, start, first);
+  const HillClimbOutcome c = climb(f.coarse, f.coarse_kept, start, start, first);
   HillClimbOptions second = o;
   second.initial_xy_step_m = std::min(o.initial_xy_step_m, 2.0 * first.min_xy_step_m);
   second.initial_z_step_m = std::min(o.initial_z_step_m, 2.0 * first.min_z_step_m);
   second.initial_angle_step_rad =
       std::min(o.initial_angle_step_rad, 2.0 * first.min_angle_step_rad);
   second.max_evaluations = std::max(1, o.max_evaluations - c.evaluations);
-  HillClimbOutcome out = climb(f.full, c.pose, start, second);
+  HillClimbOutcome out = climb(f.full, f.full_kept, c.pose, start, second);
   out.evaluations += c.evaluations;
   // The coarse climb's pose could score below the start on all points: never return worse.
   out.score_start = f.full(start);

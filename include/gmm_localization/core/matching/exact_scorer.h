@@ -18,6 +18,14 @@
 
 namespace gmm_localization {
 
+/// What ExactScorer::scoreReusing keeps per point of one pose: the 3 x 3 block's first cell,
+/// the point's height and the nine floored cell log-likelihoods it read there.
+struct CellBlockMemo {
+  int64_t cx = 0, cy = 0;
+  double z = 0.0;
+  double ll[9] = {};
+};
+
 class ExactScorer {
  public:
   /// Scores points within radius_m [m] of (center_x, center_y) in the map frame at constant
@@ -32,11 +40,28 @@ class ExactScorer {
   /// the sum is the same bit for bit with or without a pool and for any thread count.
   double score(const PointList& base_points, const Pose6& pose, TaskPool* pool = nullptr) const;
   static constexpr size_t kBlockPoints = 128;
+  /// score() for the hill climb's neighbouring poses: the points are placed heading last
+  /// (yaw about z after pitch and roll, so a step in x, y or heading leaves every height
+  /// unchanged, bit for bit), and a point whose block and height equal those in `reuse` (the
+  /// same points at the pose the step was taken from; null or empty: none) takes its nine cell
+  /// values from there instead of evaluating the mixtures again. `out` receives this pose's
+  /// (resized to the points). The value equals score()'s up to the rounding of the placement
+  /// (1e-16 relative), and is the same with or without `reuse`, bit for bit.
+  double scoreReusing(const PointList& base_points, const Pose6& pose,
+                      const std::vector<CellBlockMemo>* reuse, std::vector<CellBlockMemo>* out,
+                      TaskPool* pool = nullptr) const;
   /// Floored log-likelihood of a point in the single cell containing it (no interpolation).
   double cellLogLikelihood(const Eigen::Vector3d& p_map) const;
 
  private:
   double floored(const CellIndex& c, double z) const;
+  /// The floored log-likelihoods of the 3 x 3 cells around cell (cx, cy) at height z.
+  void blockLogLikelihoods(int64_t cx, int64_t cy, double z, double ll[9]) const;
+  /// Their Gaussian-weighted mean for a point (fx, fy) cells from the centre cell's centre.
+  double weightedMean(double fx, double fy, const double ll[9]) const;
+  /// Block sums of per-point values (see score()).
+  template <typename PointValue>
+  double blockSums(size_t points, TaskPool* pool, const PointValue& value) const;
   double kernel(double d_cells) const;
   static constexpr int kKernelTableSize = 1538;        // covers [0, 1.5] cells and one guard entry
   static constexpr double kKernelTableScale = 1024.0;  // entries per cell

@@ -48,6 +48,10 @@ struct HillClimbOutcome {
 struct ClimbObjective {
   std::function<double(const Pose6&)> full;
   std::function<double(const Pose6&)> coarse;
+  /// Optional: called right after a score of `full` (`coarse`) whose pose the climb moved to,
+  /// the start included. The next poses scored differ from that one in one coordinate: an
+  /// objective may keep what it computed there to reuse (ExactScorer::scoreReusing).
+  std::function<void()> full_kept, coarse_kept;
 };
 
 /// Every (size / max_points)-th point, `max_points` of them; all when there are no more.
@@ -60,7 +64,8 @@ HillClimbOutcome hillClimb(const ClimbObjective& objective, const Pose6& start,
 /// Coordinate pattern search over (x, y, z, roll, pitch, yaw) maximising scorer.score(points,
 /// pose) within the box around `start`, coarse-to-fine (options.coarse_points). Deterministic;
 /// never returns a worse pose than start (scored on all points). `pool`: each score's point
-/// blocks in parallel (the same result, bit for bit).
+/// blocks in parallel (the same result, bit for bit). The poses are scored by
+/// ExactScorer::scoreReusing, each reusing the cells of the pose the climb stands on.
 HillClimbOutcome hillClimb(const ExactScorer& scorer, const PointList& base_points,
                            const Pose6& start, const HillClimbOptions& options,
                            TaskPool* pool = nullptr);
