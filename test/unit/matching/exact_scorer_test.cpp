@@ -5,38 +5,18 @@
 #include "gmm_localization/core/matching/exact_scorer.h"
 
 #include <cmath>
-#include <memory>
 #include <random>
 #include <vector>
 
 #include <gtest/gtest.h>
 
 #include "gmm_localization/core/matching/hill_climb.h"
-#include "support/street_map.h"
-#include "support/synthetic_world.h"
+#include "support/street_fixture.h"
 
 namespace gmm_localization {
 namespace {
 
-class ExactScorerTest : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() {
-    world_ = std::make_unique<testing::SyntheticWorld>(42);
-    gmm_ = std::make_unique<GmmMap>(world_->buildMap(testing::streetGeometry(), 1));
-    chunks_ = std::make_unique<ChunkMap>(testing::rasterizeStreet(*gmm_));
-  }
-  static void TearDownTestSuite() {
-    chunks_.reset();
-    gmm_.reset();
-    world_.reset();
-  }
-  static std::unique_ptr<testing::SyntheticWorld> world_;
-  static std::unique_ptr<GmmMap> gmm_;
-  static std::unique_ptr<ChunkMap> chunks_;
-};
-std::unique_ptr<testing::SyntheticWorld> ExactScorerTest::world_;
-std::unique_ptr<GmmMap> ExactScorerTest::gmm_;
-std::unique_ptr<ChunkMap> ExactScorerTest::chunks_;
+using ExactScorerTest = testing::StreetFixture;
 
 /// Share of points whose block and height are those of `before` (the points reusable).
 double sameKeys(const std::vector<CellBlockMemo>& a, const std::vector<CellBlockMemo>& b) {

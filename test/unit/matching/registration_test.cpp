@@ -13,33 +13,14 @@
 
 #include "gmm_localization/core/raster/rasterizer.h"
 #include "support/corridor_map.h"
-#include "support/street_map.h"
-#include "support/synthetic_world.h"
+#include "support/street_fixture.h"
 
 namespace gmm_localization {
 namespace {
 
 double angleDiff(double a, double b) { return std::atan2(std::sin(a - b), std::cos(a - b)); }
 
-class RegistrationTest : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() {
-    world_ = std::make_unique<testing::SyntheticWorld>(42);
-    gmm_ = std::make_unique<GmmMap>(world_->buildMap(testing::streetGeometry(), 1));
-    chunks_ = std::make_unique<ChunkMap>(testing::rasterizeStreet(*gmm_));
-  }
-  static void TearDownTestSuite() {
-    chunks_.reset();
-    gmm_.reset();
-    world_.reset();
-  }
-  static std::unique_ptr<testing::SyntheticWorld> world_;
-  static std::unique_ptr<GmmMap> gmm_;
-  static std::unique_ptr<ChunkMap> chunks_;
-};
-std::unique_ptr<testing::SyntheticWorld> RegistrationTest::world_;
-std::unique_ptr<GmmMap> RegistrationTest::gmm_;
-std::unique_ptr<ChunkMap> RegistrationTest::chunks_;
+using RegistrationTest = testing::StreetFixture;
 
 TEST_F(RegistrationTest, RecoversFiftySeededPoses) {
   std::mt19937 rng(2024);
