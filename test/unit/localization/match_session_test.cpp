@@ -60,6 +60,14 @@ MatchReport reportWith(const ScanInput& scan, const MatchStart& start, MatchOutc
 
 using Session = MatchSession<int>;
 
+/// Tracking: the configured pose (5, 5, 0) given, the match of `scan` around it accepted there.
+bool trackAtConfiguredPose(Session& s, const ScanInput& scan) {
+  s.setConfiguredPose(poseAt(5.0, 5.0, 0.0), true);
+  const MatchStart start = s.beginMatch(scan);
+  MatchReport r = acceptedReport(scan, start, 0.0, 0.0);
+  return s.finishMatch(start.epoch, &r);
+}
+
 TEST(MatchSessionOptions, ValidateNamesTheKey) {
   MatchSessionOptions o;
   EXPECT_EQ(o.validate(), "");
@@ -376,20 +384,17 @@ TEST(MatchSession, AGlobalSearchRequestedSearchesTheGlobalWindowUntilAMatchOfItI
   policy.window.global_max_half_xy_m = 40.0;
   Session s(MatchSessionOptions(), policy);
   EXPECT_NE(s.requestGlobalSearch().find("no pose to search around"), std::string::npos);
-  s.setConfiguredPose(poseAt(5.0, 5.0, 0.0), true);
   const ScanInput a = scanAt(10.0);
-  MatchStart start = s.beginMatch(a);
-  MatchReport r = acceptedReport(a, start, 0.0, 0.0);
-  ASSERT_TRUE(s.finishMatch(start.epoch, &r));
+  ASSERT_TRUE(trackAtConfiguredPose(s, a));
   const MatchStart before = s.beginMatch(a);  // a match under way when the request comes
   EXPECT_FALSE(before.prior.lost);
   EXPECT_EQ(s.requestGlobalSearch(), "");
   EXPECT_EQ(s.tracker().mode(), PriorMode::kLost);
-  start = s.beginMatch(a);
+  MatchStart start = s.beginMatch(a);
   EXPECT_TRUE(start.prior.lost);
   EXPECT_DOUBLE_EQ(start.prior.wide_window.half_x_m, 40.0);
   // The match that started before does not end it; a rejected global one neither.
-  r = acceptedReport(a, before, 0.1, 0.0);
+  MatchReport r = acceptedReport(a, before, 0.1, 0.0);
   ASSERT_TRUE(s.finishMatch(before.epoch, &r));
   EXPECT_TRUE(s.beginMatch(a).prior.lost);
   MatchReport rejected = reportWith(a, start, MatchOutcome::kRejected);
@@ -416,11 +421,9 @@ TEST(MatchSession, EachGlobalSearchThatFindsNothingWidensTheNextOneInACycle) {
   policy.window.global_widen_factor = 1.5;
   policy.window.global_widest_half_xy_m = 100.0;
   Session s(MatchSessionOptions(), policy);
-  s.setConfiguredPose(poseAt(5.0, 5.0, 0.0), true);
   const ScanInput a = scanAt(10.0);
-  MatchStart start = s.beginMatch(a);
-  MatchReport r = acceptedReport(a, start, 0.0, 0.0);
-  ASSERT_TRUE(s.finishMatch(start.epoch, &r));
+  ASSERT_TRUE(trackAtConfiguredPose(s, a));
+  MatchStart start;
   ASSERT_EQ(s.requestGlobalSearch(), "");
   auto rejectGlobal = [&]() {
     start = s.beginMatch(a);
@@ -448,7 +451,7 @@ TEST(MatchSession, EachGlobalSearchThatFindsNothingWidensTheNextOneInACycle) {
   // Found: the next global search starts from global_max_half_xy_m again.
   start = s.beginMatch(a);
   EXPECT_DOUBLE_EQ(start.prior.wide_window.half_x_m, 100.0);
-  r = acceptedReport(a, start, 0.0, 0.0);
+  MatchReport r = acceptedReport(a, start, 0.0, 0.0);
   ASSERT_TRUE(s.finishMatch(start.epoch, &r));
   EXPECT_EQ(s.tracker().globalMisses(), 0);
   ASSERT_EQ(s.requestGlobalSearch(), "");
@@ -464,11 +467,8 @@ TEST(MatchSession, WhileAGlobalSearchRunsALostPriorIsInterimOrSkipped) {
   policy.window.interim_half_xy_m = 1.5;
   policy.window.interim_half_heading_rad = 0.04;
   Session s(MatchSessionOptions(), policy);
-  s.setConfiguredPose(poseAt(5.0, 5.0, 0.0), true);
   const ScanInput a = scanAt(10.0);
-  MatchStart start = s.beginMatch(a);
-  MatchReport r = acceptedReport(a, start, 0.0, 0.0);
-  ASSERT_TRUE(s.finishMatch(start.epoch, &r));
+  ASSERT_TRUE(trackAtConfiguredPose(s, a));
 
   // Asked for (the estimate was fine): the other scans are searched in the interim window
   // around the same centre, with the certificate required; the global worker is busy.
@@ -489,7 +489,7 @@ TEST(MatchSession, WhileAGlobalSearchRunsALostPriorIsInterimOrSkipped) {
   EXPECT_DOUBLE_EQ(interim.prior.pose.x, global.prior.pose.x);
   EXPECT_DOUBLE_EQ(interim.prior.pose.y, global.prior.pose.y);
   // An accepted interim match answers its scan but does not end the global request.
-  r = acceptedReport(a, interim, 0.05, 0.0);
+  MatchReport r = acceptedReport(a, interim, 0.05, 0.0);
   ASSERT_TRUE(s.finishMatch(interim.epoch, &r));
   EXPECT_EQ(s.tracker().mode(), PriorMode::kLost);
   // A rejected interim window makes the localization lost by its rejections
