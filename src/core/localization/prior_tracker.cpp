@@ -144,11 +144,7 @@ void PriorTracker::setExplicitPose(const Pose6& pose, double stamp_s, PriorSourc
   explicit_z_known_ = z_known;
   relocalizing_ = true;
   global_requested_ = false;  // a new pose to search around replaces a global request
-  consecutive_rejections_ = 0;
-  wide_rejections_ = 0;
-  collapses_ = 0;
-  global_misses_ = 0;
-  lost_by_rejections_ = false;
+  clearRejections();
 }
 
 Pose6 PriorTracker::completePlanarPose(const Pose6& planar, const OdometryBuffer* odometry,
@@ -313,11 +309,7 @@ void PriorTracker::onAccepted(double stamp_s, const Pose6& pose,
       history_.pop_front();
     }
   }
-  consecutive_rejections_ = 0;
-  wide_rejections_ = 0;
-  collapses_ = 0;
-  global_misses_ = 0;
-  lost_by_rejections_ = false;
+  clearRejections();
   // A match that started before the global search was asked for does not end it.
   if (used.lost) global_requested_ = false;
   if (has_explicit_ && used.explicit_generation != explicit_generation_) return;
@@ -373,13 +365,17 @@ void PriorTracker::reset() {
   has_explicit_ = false;
   relocalizing_ = false;
   global_requested_ = false;
+  clearRejections();
+  recent_ll_.clear();
+  distrust_posterior_ = false;
+}
+
+void PriorTracker::clearRejections() {
   consecutive_rejections_ = 0;
   wide_rejections_ = 0;
   collapses_ = 0;
   global_misses_ = 0;
   lost_by_rejections_ = false;
-  recent_ll_.clear();
-  distrust_posterior_ = false;
 }
 
 bool PriorTracker::lost() const { return global_requested_ || lostByRejections(); }

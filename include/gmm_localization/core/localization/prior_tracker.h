@@ -197,6 +197,9 @@ class PriorTracker {
   Prior widenIfLost(Prior p) const;
   /// Median of recent_ll_ (NaN: none).
   double recentLogLikelihood() const;
+  /// Forgets the rejections in a row, the global misses and the lost state they led to (a
+  /// match accepted, a pose given, a reset).
+  void clearRejections();
   /// After a jump (distrust_posterior_): the posterior carried to ts lies farther than
   /// jump_posterior_max_gap_m from the last accepted match carried to ts.
   bool posteriorDisagrees(double ts, const OdometryBuffer* odometry) const;
