@@ -9,6 +9,11 @@ longitudinal error minus its matches' (the matches' error interpolated to the EK
 its mean while moving (over 1 m/s) and while stopped (under 0.5 m/s), and a least-squares fit
 of it as a constant plus terms in speed and acceleration (speed and acceleration from the
 ground truth in ekf.csv). A positive difference means the EKF is ahead of its matches.
+Then, over the first and the last WINDOW_S (20 s) of the drive: the EKF's INS twist scale s
+(ekf.csv's twist_scale, mean; "-" in outputs without it) and the raw matches' longitudinal error
+per distance driven (the slope of a line fitted to it against the distance, in percent): where
+the map is stretched or compressed against the world, the matches imply a distance that differs
+from the true one by that share, and the INS scale calibrated against them learns it.
 docs/evaluation.md ("The EKF worse than its matches in the imperfect world") uses it.
 A directory without EKF samples or without matches with a pose is reported as having no data;
 the exit status is then 1. Uses Debian's python3-numpy only (run with /usr/bin/python3).
@@ -21,6 +26,7 @@ import numpy as np
 
 MOVING_MPS = 1.0
 STOPPED_MPS = 0.5
+WINDOW_S = 20.0
 
 
 def columns(path, names):
@@ -34,10 +40,42 @@ def rms_cm(x):
     return 100.0 * float(np.sqrt(np.mean(np.square(x))))
 
 
+def has_column(path, name):
+    with open(path, newline="") as f:
+        return name in next(csv.reader(f), [])
+
+
+def windows(t):
+    """Masks of the first and the last WINDOW_S of the times t."""
+    return [t <= t.min() + WINDOW_S, t >= t.max() - WINDOW_S]
+
+
+def scale_cells(ekf_path, t):
+    """Mean twist scale [%] over the first and the last window, or '-' without the column."""
+    if not has_column(ekf_path, "twist_scale"):
+        return "-"
+    s = columns(ekf_path, ["twist_scale"])["twist_scale"]
+    means = [np.nanmean(s[w]) if np.any(np.isfinite(s[w])) else np.nan for w in windows(t)]
+    return " / ".join("-" if np.isnan(m) else f"{100 * m:+.2f} %" for m in means)
+
+
+def stretch_cells(t, distance, m_t, m_long):
+    """The matches' longitudinal error per distance driven [%] in the first and last window."""
+    m_distance = np.interp(m_t, t, distance)
+    out = []
+    for w in windows(m_t):
+        if np.count_nonzero(w) < 3 or np.ptp(m_distance[w]) < 1.0:
+            out.append("-")
+            continue
+        slope = np.polyfit(m_distance[w], m_long[w], 1)[0]
+        out.append(f"{100 * slope:+.2f} %")
+    return " / ".join(out)
+
+
 def row(directory):
     """One table row for an evaluate output directory, or None when it holds no data."""
-    ekf = columns(os.path.join(directory, "ekf.csv"),
-                  ["t", "gt_x", "gt_y", "longitudinal_m", "lateral_m"])
+    ekf_path = os.path.join(directory, "ekf.csv")
+    ekf = columns(ekf_path, ["t", "gt_x", "gt_y", "longitudinal_m", "lateral_m"])
     matches = columns(os.path.join(directory, "matches.csv"),
                       ["stamp", "has_pose", "longitudinal_m", "lateral_m"])
     with_pose = matches["has_pose"] == 1
@@ -49,6 +87,7 @@ def row(directory):
     m_lat = matches["lateral_m"][with_pose]
     dt = np.maximum(np.diff(t), 1e-3)
     speed = np.hypot(np.diff(ekf["gt_x"]), np.diff(ekf["gt_y"])) / dt
+    distance = np.concatenate([[0.0], np.cumsum(speed * dt)])
     speed = np.concatenate([[speed[0]], speed])
     accel = np.gradient(speed, t)
     # Only where matches exist on both sides: no extrapolation.
@@ -64,7 +103,8 @@ def row(directory):
     return (f"| {directory} | {rms_cm(ekf['longitudinal_m']):.1f} / {rms_cm(ekf['lateral_m']):.1f} cm"
             f" | {rms_cm(m_long):.1f} / {rms_cm(m_lat):.1f} cm | {mean_cm(moving)} | "
             f"{mean_cm(stopped)} | {100 * fit[0]:+.2f} cm, {100 * fit[1]:+.3f} cm per m/s, "
-            f"{100 * fit[2]:+.2f} cm per m/s^2 |")
+            f"{100 * fit[2]:+.2f} cm per m/s^2 | {scale_cells(ekf_path, t)} | "
+            f"{stretch_cells(t, distance, m_t, m_long)} |")
 
 
 def main(argv):
@@ -72,8 +112,10 @@ def main(argv):
         print(__doc__.strip())
         return 0 if len(argv) >= 2 else 2
     print("| run | EKF long. / lat. RMS | raw long. / lat. RMS | EKF - raw moving | "
-          "EKF - raw stopped | EKF - raw fit: constant, speed, acceleration |")
-    print("|---|---|---|---|---|---|")
+          "EKF - raw stopped | EKF - raw fit: constant, speed, acceleration | "
+          f"twist scale s, first / last {WINDOW_S:.0f} s | "
+          f"raw long. error per distance, first / last {WINDOW_S:.0f} s |")
+    print("|---|---|---|---|---|---|---|---|")
     status = 0
     for directory in argv[1:]:
         try:

@@ -150,6 +150,7 @@ class BagRun {
       row.sigma_x_m = std::sqrt(std::max(0.0, cov(0, 0)));
       row.sigma_y_m = std::sqrt(std::max(0.0, cov(1, 1)));
       row.sigma_yaw_rad = std::sqrt(std::max(0.0, cov(5, 5)));
+      row.twist_scale = state->twistScale();
       out_.ekf.push_back(row);
     }
   }

@@ -31,6 +31,8 @@ struct EkfRow {
   VehicleFrameError error;
   double sigma_x_m = 0.0, sigma_y_m = 0.0, sigma_yaw_rad = 0.0;
   MapFrameErrors map_frame;
+  /// The EKF's INS twist scale s (twist = (1 + s) v); NaN when unknown (a recording).
+  double twist_scale = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// A registration's certificate and the truth's score deficit (docs/integrity.md).
