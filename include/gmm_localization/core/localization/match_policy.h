@@ -114,7 +114,10 @@ struct PoseCovariancePolicyOptions {
   double fixed_sigma_xy_m = 0.15;        ///< [m] when use_search_covariance is false
   double fixed_sigma_yaw_rad = 0.005;    ///< [rad]
   double min_sigma_xy_m = 0.03;          ///< floors applied in both modes [m], [rad]
-  double min_sigma_yaw_rad = 0.002;
+  /// 0.01 rad: a match's heading carries the map's own heading error (a few tenths of a degree
+  /// on a surveyed map, the same from one scan to the next), which the EKF, fusing 10 matches
+  /// a second as independent, must not take for a 0.1 degree measurement (config/matcher.yaml).
+  double min_sigma_yaw_rad = 0.01;
   /// Standard deviations of the hill climb's z, roll and pitch (not estimated by the search):
   /// fixed [m], [rad].
   double sigma_z_m = 0.1;
