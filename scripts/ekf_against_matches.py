@@ -29,10 +29,14 @@ STOPPED_MPS = 0.5
 WINDOW_S = 20.0
 
 
-def columns(path, names):
-    """The named columns of a CSV file as float arrays (empty cells are NaN)."""
+def read_rows(path):
+    """The rows of a CSV file as dicts keyed by its header."""
     with open(path, newline="") as f:
-        rows = list(csv.DictReader(f))
+        return list(csv.DictReader(f))
+
+
+def columns(rows, names):
+    """The named columns of CSV rows as float arrays (empty cells are NaN)."""
     return {n: np.array([float(r[n]) if r[n] != "" else np.nan for r in rows]) for n in names}
 
 
@@ -40,21 +44,16 @@ def rms_cm(x):
     return 100.0 * float(np.sqrt(np.mean(np.square(x))))
 
 
-def has_column(path, name):
-    with open(path, newline="") as f:
-        return name in next(csv.reader(f), [])
-
-
 def windows(t):
     """Masks of the first and the last WINDOW_S of the times t."""
     return [t <= t.min() + WINDOW_S, t >= t.max() - WINDOW_S]
 
 
-def scale_cells(ekf_path, t):
+def scale_cells(ekf_rows, t):
     """Mean twist scale [%] over the first and the last window, or '-' without the column."""
-    if not has_column(ekf_path, "twist_scale"):
+    if "twist_scale" not in ekf_rows[0]:
         return "-"
-    s = columns(ekf_path, ["twist_scale"])["twist_scale"]
+    s = columns(ekf_rows, ["twist_scale"])["twist_scale"]
     means = [np.nanmean(s[w]) if np.any(np.isfinite(s[w])) else np.nan for w in windows(t)]
     return " / ".join("-" if np.isnan(m) else f"{100 * m:+.2f} %" for m in means)
 
@@ -74,9 +73,9 @@ def stretch_cells(t, distance, m_t, m_long):
 
 def row(directory):
     """One table row for an evaluate output directory, or None when it holds no data."""
-    ekf_path = os.path.join(directory, "ekf.csv")
-    ekf = columns(ekf_path, ["t", "gt_x", "gt_y", "longitudinal_m", "lateral_m"])
-    matches = columns(os.path.join(directory, "matches.csv"),
+    ekf_rows = read_rows(os.path.join(directory, "ekf.csv"))
+    ekf = columns(ekf_rows, ["t", "gt_x", "gt_y", "longitudinal_m", "lateral_m"])
+    matches = columns(read_rows(os.path.join(directory, "matches.csv")),
                       ["stamp", "has_pose", "longitudinal_m", "lateral_m"])
     with_pose = matches["has_pose"] == 1
     t = ekf["t"]
@@ -103,7 +102,7 @@ def row(directory):
     return (f"| {directory} | {rms_cm(ekf['longitudinal_m']):.1f} / {rms_cm(ekf['lateral_m']):.1f} cm"
             f" | {rms_cm(m_long):.1f} / {rms_cm(m_lat):.1f} cm | {mean_cm(moving)} | "
             f"{mean_cm(stopped)} | {100 * fit[0]:+.2f} cm, {100 * fit[1]:+.3f} cm per m/s, "
-            f"{100 * fit[2]:+.2f} cm per m/s^2 | {scale_cells(ekf_path, t)} | "
+            f"{100 * fit[2]:+.2f} cm per m/s^2 | {scale_cells(ekf_rows, t)} | "
             f"{stretch_cells(t, distance, m_t, m_long)} |")
 
 
