@@ -60,10 +60,20 @@ void Matcher::onInitialPose(const geometry_msgs::PoseWithCovarianceStamped::Cons
   Eigen::Matrix3d cov_xyh;
   cov_xyh << c[0], c[1], c[5], c[6], c[7], c[11], c[30], c[31], c[35];
   WindowExtent window;
+  bool cancelled = false;
   {
     std::lock_guard<std::mutex> lock(session_mutex_);
     full =
         session_.setInitialPose(pose->pose, stamp, /*z_known=*/false, &z_known, &cov_xyh, &window);
+    // A global search around the old estimate is no longer wanted: the cores go to this pose.
+    if (global_busy_) {
+      global_cancel_ = true;
+      cancelled = true;
+    }
+  }
+  if (cancelled) {
+    ROS_INFO("%s: the running global search around the previous estimate is cancelled",
+             name_.c_str());
   }
   ROS_INFO("%s: initial pose x %.2f y %.2f yaw %.3f (z %.2f %s): searching +-%.1f m, +-%.0f deg",
            name_.c_str(), full.x, full.y, full.yaw, full.z,

@@ -98,8 +98,9 @@ void Matcher::globalWorkerLoop() {
       job = std::move(*global_job_);
       global_job_.reset();
     }
-    answerEvenIfThrows(job.msg, job.dropped,
-                       [&] { runMatch(job.msg, std::move(job.scan), job.start, job.dropped); });
+    answerEvenIfThrows(job.msg, job.dropped, [&] {
+      runMatch(job.msg, std::move(job.scan), job.start, job.dropped, &global_cancel_);
+    });
     std::lock_guard<std::mutex> lock(session_mutex_);
     global_busy_ = false;
   }
@@ -178,6 +179,7 @@ void Matcher::processScan(const sensor_msgs::PointCloud2::ConstPtr& msg, uint32_
       // The global search goes to its own worker; this one goes on with the next scans.
       global_busy_ = true;
       global_job_ = GlobalJob{msg, std::move(scan), start, dropped};
+      global_cancel_ = false;
     }
   }
   if (!start.skip_reason.empty()) {  // answered at once: the global search has the cores
@@ -192,7 +194,7 @@ void Matcher::processScan(const sensor_msgs::PointCloud2::ConstPtr& msg, uint32_
 }
 
 void Matcher::runMatch(const sensor_msgs::PointCloud2::ConstPtr& msg, ScanInput scan,
-                       const MatchStart& start, uint32_t dropped) {
+                       const MatchStart& start, uint32_t dropped, const std::atomic<bool>* cancel) {
   std::shared_ptr<const ChunkMap> map;
   // Method fused: the reflectivity layer, or why it cannot be searched (the scan is then
   // answered skipped with that reason by the processor, which gets no second map).
@@ -211,7 +213,7 @@ void Matcher::runMatch(const sensor_msgs::PointCloud2::ConstPtr& msg, ScanInput 
   const bool want_traversal = traversal_pub_.getNumSubscribers() > 0;
   MatchReport report = processor_->process(
       map ? *map : kEmpty, std::move(scan), start.prior, start.twistOrNull(), want_traversal,
-      [] { return ros::WallTime::now().toSec(); }, reflectivity.get());
+      [] { return ros::WallTime::now().toSec(); }, reflectivity.get(), cancel);
   if (fused && !reflectivity && report.outcome == MatchOutcome::kSkipped &&
       report.reason.rfind("no reflectivity map", 0) == 0) {
     report.reason = "method fused: " + reflectivity_problem;

@@ -116,9 +116,11 @@ class Matcher {
   void workerLoop();
   void globalWorkerLoop();
   void processScan(const sensor_msgs::PointCloud2::ConstPtr& msg, uint32_t dropped);
-  /// Matches one converted scan from `start`, applies the outcome and publishes.
+  /// Matches one converted scan from `start`, applies the outcome and publishes. `cancel`: the
+  /// global worker's flag (MatchProcessor::process).
   void runMatch(const sensor_msgs::PointCloud2::ConstPtr& msg, ScanInput scan,
-                const MatchStart& start, uint32_t dropped);
+                const MatchStart& start, uint32_t dropped,
+                const std::atomic<bool>* cancel = nullptr);
   /// fn(), or the failure status of msg when it throws (the scan is answered all the same).
   template <typename Fn>
   void answerEvenIfThrows(const sensor_msgs::PointCloud2::ConstPtr& msg, uint32_t dropped, Fn&& fn);
@@ -165,6 +167,10 @@ class Matcher {
   std::optional<GlobalJob> global_job_;  ///< handed over, not yet taken
   bool global_busy_ = false;             ///< a job handed over and not finished
   std::condition_variable global_cv_;
+  /// Set by a new /initialpose while the global worker has a job (waiting or running): its
+  /// search around the old pose stops (answered rejected, not counted against the new pose);
+  /// cleared when a job is handed over. Written under session_mutex_.
+  std::atomic<bool> global_cancel_{false};
 
   // The map: protocol state and the snapshot the worker searches.
   std::mutex map_mutex_;

@@ -76,7 +76,8 @@ Result<MatchProcessor> MatchProcessor::create(const RegistrationOptions& registr
 MatchReport MatchProcessor::process(const ChunkMap& map, ScanInput scan, const Prior& prior,
                                     const BodyTwist* twist, bool want_traversal,
                                     const std::function<double()>& now,
-                                    const ChunkMap* reflectivity_map) const {
+                                    const ChunkMap* reflectivity_map,
+                                    const std::atomic<bool>* cancel) const {
   const double t0 = now ? now() : 0.0;
   MatchReport r;
   r.stamp_s = scan.stamp_s;
@@ -135,6 +136,7 @@ MatchReport MatchProcessor::process(const ChunkMap& map, ScanInput scan, const P
   request.half_heading_rad = r.window.half_heading_rad;
   request.has_reference = scan.has_reference;
   request.reference = scan.reference;
+  request.cancel = cancel;
   // The reflectivity layer: levelled ground returns with their intensity as z (x, y, heading);
   // the fused method: those returns as the second channel of the height match.
   const bool reflectivity = method_.method == MatchMethod::kReflectivity;

@@ -244,6 +244,8 @@ struct SharedSearch {
   std::atomic<int64_t> incumbent{-1};
   std::atomic<int64_t> evaluations{0};
   std::atomic<bool> budget_hit{false};
+  std::atomic<bool> cancelled{false};
+  const std::atomic<bool>* cancel = nullptr;  ///< the caller's flag (may be null)
 
   void raise(int64_t score) {
     int64_t cur = incumbent.load();
@@ -264,6 +266,10 @@ QueueResult searchQueue(const SearchProblem& problem, const GlobalSearchOptions&
     ++out.stats.evaluations_per_layer[layer];
     const int64_t total = shared.evaluations.fetch_add(1) + 1;
     if (options.max_evaluations > 0 && total >= options.max_evaluations) {
+      shared.budget_hit = true;
+    }
+    if (shared.cancel != nullptr && shared.cancel->load(std::memory_order_relaxed)) {
+      shared.cancelled = true;
       shared.budget_hit = true;
     }
   };
@@ -310,7 +316,8 @@ QueueResult searchQueue(const SearchProblem& problem, const GlobalSearchOptions&
 }  // namespace
 
 GlobalSearchOutcome globalBranchAndBound(const SearchProblem& problem,
-                                         const GlobalSearchOptions& options, TaskPool* pool) {
+                                         const GlobalSearchOptions& options, TaskPool* pool,
+                                         const std::atomic<bool>* cancel) {
   const SearchWindow& w = problem.window();
   const int max_layer = problem.map().options().num_layers;
   const int root_layer = search_detail::intervalRootLayer(problem, options);
@@ -323,6 +330,7 @@ GlobalSearchOutcome globalBranchAndBound(const SearchProblem& problem,
   const double typical_range = search_detail::typicalRangeCells(problem, options);
 
   SharedSearch shared;
+  shared.cancel = cancel;
   int64_t prior_score = -1;
   if (options.prior_as_incumbent) {
     prior_score = headingIntervalBound(problem, w.half_h, 0, 0, w.half_x, w.half_y,
@@ -364,8 +372,10 @@ GlobalSearchOutcome globalBranchAndBound(const SearchProblem& problem,
                                           best->leaf.bound, std::move(stats));
     return out;
   }
-  // Budget reached (or, were a bound not admissible, nothing left): the prior, not an optimum.
+  // Budget reached or cancelled (or, were a bound not admissible, nothing left): the prior, not
+  // an optimum.
   out.complete = false;
+  out.cancelled = shared.cancelled;
   out.best = search_detail::makeOutcome(problem, w.half_h, w.half_x, w.half_y,
                                         std::max<int64_t>(prior_score, 0), std::move(stats));
   return out;

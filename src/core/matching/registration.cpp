@@ -167,11 +167,18 @@ RegistrationResult<MatchResult> Registration::match(const ChunkMap& map,
     return RegistrationResult<MatchResult>::failure(prepared.errorKind(), prepared.error());
   }
   const double t1 = tick();
-  bool complete = true;
-  const SearchOutcome best = search(prepared->problem, traversal, &complete);
+  bool complete = true, cancelled = false;
+  const SearchOutcome best =
+      search(prepared->problem, traversal, &complete, request.cancel, &cancelled);
   if (timing) {
     timing->filter_s = t1 - t0;
     timing->search_s = tick() - t1;
+  }
+  if (cancelled) {
+    return RegistrationResult<MatchResult>::failure(
+        RegistrationError::kCancelled,
+        "global search cancelled after " + std::to_string(best.stats.evaluations) +
+            " node scores: a newer pose replaced the one it searched around");
   }
   if (!complete) {
     return RegistrationResult<MatchResult>::failure(
@@ -184,13 +191,17 @@ RegistrationResult<MatchResult> Registration::match(const ChunkMap& map,
 }
 
 SearchOutcome Registration::search(const SearchProblem& problem,
-                                   std::vector<TraversalNode>* traversal, bool* complete) const {
+                                   std::vector<TraversalNode>* traversal, bool* complete,
+                                   const std::atomic<bool>* cancel, bool* cancelled) const {
   if (complete != nullptr) *complete = true;
+  if (cancelled != nullptr) *cancelled = false;
   // Algorithm 2 (reference) or 3 over x, y, heading; wide heading ranges over intervals.
   if (options_.exhaustive) return exhaustiveSearch(problem);
   if (problem.window().sizeH() >= options_.interval_search_min_headings) {
-    GlobalSearchOutcome g = globalBranchAndBound(problem, options_.global, global_pool_.get());
+    GlobalSearchOutcome g =
+        globalBranchAndBound(problem, options_.global, global_pool_.get(), cancel);
     if (complete != nullptr) *complete = g.complete;
+    if (cancelled != nullptr) *cancelled = g.cancelled;
     return std::move(g.best);
   }
   return branchAndBoundSearch(problem, options_.branch_and_bound, traversal, pool_.get());

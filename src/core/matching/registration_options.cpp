@@ -55,6 +55,8 @@ const char* registrationErrorName(RegistrationError kind) {
       return "numerical";
     case RegistrationError::kSearchBudget:
       return "search_budget";
+    case RegistrationError::kCancelled:
+      return "cancelled";
   }
   return "unknown";
 }

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <random>
 
@@ -223,6 +224,28 @@ TEST(GlobalSearch, BudgetStopsWithoutClaimingAnOptimum) {
   EXPECT_TRUE(go.validate().empty());
   go.root_heading_levels = 40;
   EXPECT_FALSE(go.validate().empty());
+}
+
+TEST(GlobalSearch, ACancelFlagStopsItAsItsBudgetWouldAndSaysSo) {
+  const ChunkMap chunks = testing::smallRandomChunks(9, 0.3);
+  std::mt19937 rng(8);
+  const SearchWindow w = fullTurnWindow(rng, 6.0);
+  auto problem = SearchProblem::create(chunks, testing::randomPoints(rng, 150, 5.0), w);
+  ASSERT_TRUE(problem.ok()) << problem.error();
+  const GlobalSearchOutcome full = globalBranchAndBound(problem.value());
+  ASSERT_TRUE(full.complete);
+  EXPECT_FALSE(full.cancelled);
+  std::atomic<bool> cancel{false};
+  const GlobalSearchOutcome unset = globalBranchAndBound(problem.value(), {}, nullptr, &cancel);
+  EXPECT_TRUE(unset.complete);  // a flag never set changes nothing
+  EXPECT_EQ(unset.best.score, full.best.score);
+  EXPECT_EQ(unset.best.stats.evaluations, full.best.stats.evaluations);
+  cancel = true;
+  const GlobalSearchOutcome g = globalBranchAndBound(problem.value(), {}, nullptr, &cancel);
+  EXPECT_FALSE(g.complete);
+  EXPECT_TRUE(g.cancelled);
+  EXPECT_EQ(g.best.heading_index, w.half_h);  // the prior, not an optimum
+  EXPECT_LT(g.best.stats.evaluations, full.best.stats.evaluations);
 }
 
 }  // namespace

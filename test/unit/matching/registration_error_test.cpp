@@ -1,6 +1,7 @@
 // Registration failures carry their kind (RegistrationError) beside the unchanged message, and
 // MatchProcessor decides "skipped" (nothing to search with) against "rejected" on the kind.
 
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -102,6 +103,21 @@ TEST_F(RegistrationErrorTest, EachFailureHasItsKindAndItsMessage) {
   EXPECT_EQ(low.errorKind(), RegistrationError::kLowCoverage) << low.error();
   EXPECT_NE(low.error().find("% of the scan lies over mapped cells"), std::string::npos)
       << low.error();
+
+  // A global window (the full turn) whose caller no longer wants the answer, and its budget.
+  MatchRequest global = request();
+  global.half_heading_rad = M_PI;
+  std::atomic<bool> cancel{true};
+  global.cancel = &cancel;
+  const auto cancelled = reg.match(*chunks_, scan_, global);
+  EXPECT_EQ(cancelled.errorKind(), RegistrationError::kCancelled) << cancelled.error();
+  EXPECT_EQ(cancelled.error().rfind("global search cancelled after ", 0), 0u) << cancelled.error();
+  RegistrationOptions tiny;
+  tiny.global.max_evaluations = 3;
+  global.cancel = nullptr;
+  const auto budget = Registration(tiny).match(*chunks_, scan_, global);
+  EXPECT_EQ(budget.errorKind(), RegistrationError::kSearchBudget) << budget.error();
+  EXPECT_STREQ(registrationErrorName(RegistrationError::kCancelled), "cancelled");
 
   // The kind survives a conversion to the plain Result (the message does).
   const Result<MatchResult> plain = off;

@@ -7,6 +7,7 @@
 //
 // Thread-safety: process() is const and may run concurrently on different inputs.
 
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -115,11 +116,14 @@ class MatchProcessor {
   /// traversal. `now` (seconds, any epoch) enables the timings. Never throws; every failure is a
   /// report with a reason. An accepted report always has a finite pose and covariance.
   /// `reflectivity_map`: the fused method's second map (its reflectivity layer, rasterized like
-  /// `map`); without it a fused scan is skipped with the reason.
+  /// `map`); without it a fused scan is skipped with the reason. `cancel`: a global search
+  /// stops when another thread sets it (MatchRequest::cancel; the scan is then rejected with
+  /// the reason).
   MatchReport process(const ChunkMap& map, ScanInput scan, const Prior& prior,
                       const BodyTwist* twist, bool want_traversal,
                       const std::function<double()>& now = nullptr,
-                      const ChunkMap* reflectivity_map = nullptr) const;
+                      const ChunkMap* reflectivity_map = nullptr,
+                      const std::atomic<bool>* cancel = nullptr) const;
 
   const RegistrationOptions& registrationOptions() const { return tracking_.options(); }
   const LocalizationPolicyOptions& policyOptions() const { return policy_; }

@@ -44,6 +44,7 @@
 // Verified against exhaustiveSearch on small randomized cases, and the bound against the max over
 // its leaves, in test/unit/matching/global_search_test.cpp.
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -101,8 +102,9 @@ struct GlobalSearchOptions {
 };
 
 struct GlobalSearchOutcome {
-  SearchOutcome best;    ///< the optimum (when complete) with the search statistics
-  bool complete = true;  ///< false when max_evaluations stopped the search first
+  SearchOutcome best;      ///< the optimum (when complete) with the search statistics
+  bool complete = true;    ///< false when max_evaluations stopped the search first
+  bool cancelled = false;  ///< ... or when the caller's cancel flag did (complete false too)
   int64_t heading_splits = 0;
   int64_t translation_splits = 0;
   int64_t point_lookups = 0;  ///< table reads of the interval bounds
@@ -111,9 +113,12 @@ struct GlobalSearchOutcome {
 /// Exact global branch-and-bound over `problem`'s whole window (all its headings).
 /// `pool`: the queues in parallel (the same optimum on any number of threads; the counts in
 /// the statistics may differ, as a queue stops once another proved a better leaf).
+/// `cancel`: when set (by another thread) the search stops at its next node score as at its
+/// budget (`complete` and `cancelled`): the answer is no longer wanted (a newer pose came).
 GlobalSearchOutcome globalBranchAndBound(const SearchProblem& problem,
                                          const GlobalSearchOptions& options = {},
-                                         TaskPool* pool = nullptr);
+                                         TaskPool* pool = nullptr,
+                                         const std::atomic<bool>* cancel = nullptr);
 
 /// The admissible bound of the node of headings [j0, j0 + 2^heading_level) (cut at the
 /// window's last heading), translations [tx, tx + 2^layer) x [ty, ty + 2^layer), as argued

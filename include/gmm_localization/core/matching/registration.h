@@ -4,6 +4,7 @@
 // multiresolution map, hill-climb 6-DOF on the exact likelihood, estimate the covariance from
 // the explored space, certify the optimum (match_certificate.h), and label obstacles.
 
+#include <atomic>
 #include <functional>
 #include <limits>
 #include <memory>
@@ -70,6 +71,9 @@ struct MatchRequest {
   /// searched and refined together with the height points (null: the height points alone).
   /// Owned by the caller for the duration of the call.
   const FusedChannel* fused = nullptr;
+  /// A global (heading-interval) search stops when another thread sets this flag: the answer
+  /// is no longer wanted (kCancelled). Owned by the caller for the duration of the call.
+  const std::atomic<bool>* cancel = nullptr;
 };
 
 struct MatchResult {
@@ -133,6 +137,7 @@ enum class RegistrationError {
   kLowCoverage,     ///< too little of the scan over mapped cells at the best pose
   kNumerical,       ///< non-finite pose or covariance
   kSearchBudget,    ///< the interval search reached GlobalSearchOptions::max_evaluations
+  kCancelled,       ///< the interval search was stopped by MatchRequest::cancel
 };
 const char* registrationErrorName(RegistrationError kind);  ///< "no_points", "off_map", ...
 
@@ -186,9 +191,11 @@ class Registration {
                                              const MatchRequest& request) const;
   /// The search stage of match(): exhaustive (options().exhaustive), over heading intervals
   /// (windows of interval_search_min_headings headings or more) or branchAndBoundSearch.
-  /// `complete` is false only when the interval search stopped at its node budget.
+  /// `complete` is false only when the interval search stopped at its node budget or at
+  /// `cancel` (then `cancelled` is true).
   SearchOutcome search(const SearchProblem& problem, std::vector<TraversalNode>* traversal,
-                       bool* complete = nullptr) const;
+                       bool* complete = nullptr, const std::atomic<bool>* cancel = nullptr,
+                       bool* cancelled = nullptr) const;
   /// Refinement, covariance, certificate, coverage check and obstacles after a search of
   /// `prepared`; after a global search, first its certificate and the confirming search
   /// (MatchResult::global).
