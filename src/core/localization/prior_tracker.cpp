@@ -318,6 +318,10 @@ void PriorTracker::onAccepted(double stamp_s, const Pose6& pose,
 }
 
 void PriorTracker::onRejected(double stamp_s, const Prior& used, Rejection why) {
+  // A search around a pose that a newer explicit pose replaced while it ran (a global search
+  // takes seconds) says nothing about the new one: its rejection is not counted (else the new
+  // pose's first global window would already be widened, its searches counted as misses).
+  if (has_explicit_ && used.explicit_generation != explicit_generation_) return;
   ++consecutive_rejections_;
   collapses_ = why == Rejection::kLikelihoodCollapse ? collapses_ + 1 : 0;
   if (used.lost && !used.interim) {

@@ -136,6 +136,31 @@ TEST(PriorTracker, CollapsesInARowMakeItLostAtOnceAndTheReferenceIsTheMedian) {
   EXPECT_DOUBLE_EQ(t.priorAt(1.0, &odom).recent_log_likelihood_per_point, -0.1);
 }
 
+TEST(PriorTracker, ASearchAroundAPoseReplacedWhileItRanIsNotCounted) {
+  // The global start sends a window's pose while the matcher's own global search around the
+  // previous one still runs: that search's rejection must not widen the new pose's window nor
+  // count towards losing it.
+  LocalizationPolicyOptions o;
+  o.relocalization.lost_after_wide_rejections = 1;
+  PriorTracker t(o);
+  OdometryBuffer odom(10.0);
+  for (int k = 0; k <= 100; ++k) odom.add(odomAt(k * 0.01, 0.0));
+  t.setExplicitPose(poseX(0.0), 0.5, PriorSource::kInitialPose, false);
+  t.onRejected(0.5, t.priorAt(0.5, &odom));  // the wide window around it: lost
+  ASSERT_EQ(t.mode(), PriorMode::kLost);
+  const Prior running = t.priorAt(0.6, &odom);  // the global search around it starts
+  ASSERT_TRUE(running.lost);
+  t.setExplicitPose(poseX(100.0), 0.7, PriorSource::kInitialPose, false);
+  t.onRejected(0.6, running);  // ... and ends after the new pose came
+  EXPECT_EQ(t.globalMisses(), 0);
+  EXPECT_EQ(t.mode(), PriorMode::kRelocalizing);
+  const Prior next = t.priorAt(0.8, &odom);
+  EXPECT_NEAR(next.pose.x, 100.0, 1e-9);
+  EXPECT_FALSE(next.lost);
+  t.onRejected(0.8, next);  // the new pose's own rejection counts
+  EXPECT_EQ(t.mode(), PriorMode::kLost);
+}
+
 TEST(PriorTracker, AfterAJumpAPosteriorThatDisagreesIsNotUsedUntilItAgrees) {
   LocalizationPolicyOptions o;
   PriorTracker t(o);

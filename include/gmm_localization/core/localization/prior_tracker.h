@@ -158,7 +158,8 @@ class PriorTracker {
   /// re-anchored at stamp_s to the pose `used` carried it to (when carried by odometry, or when
   /// it had no stamp): the explicit pose follows the vehicle's odometry while it is searched.
   /// A rejected global search (used.lost, not interim) widens the next global window
-  /// (globalHalfExtent).
+  /// (globalHalfExtent). A search around an explicit pose replaced since (another
+  /// generation) is not counted at all.
   void onRejected(double stamp_s, const Prior& used, Rejection why = Rejection::kOther);
   /// Forgets everything (time went backwards) except the match history.
   void reset();
