@@ -45,6 +45,7 @@ void EkfNode::handleEvents() {
       case FilterEventKind::kInitializedFromPose:
       case FilterEventKind::kInitializedFromMatch:
       case FilterEventKind::kRelocalizeRequest:
+      case FilterEventKind::kStartDeferred:
         ROS_INFO("%s: %s at %.3f", name_.c_str(), last_event_.c_str(), e.stamp_s);
         break;
       case FilterEventKind::kStoppedTimeBackwards:

@@ -85,6 +85,8 @@ FilterPolicyOptions loadFilterPolicyOptions(const ParamSource& parent) {
       param(nh, "relocalize_sigma_xy_m", o.relocalize_sigma_xy_m, 1e-3, 1000.0);
   o.relocalize_sigma_yaw_rad =
       param(nh, "relocalize_sigma_yaw_rad", o.relocalize_sigma_yaw_rad, 1e-4, 3.2);
+  o.max_start_sigma_yaw_rad =
+      param(nh, "max_start_sigma_yaw_rad", o.max_start_sigma_yaw_rad, 1e-4, 1e3);
   o.lost_sigma_xy_m = param(nh, "lost_sigma_xy_m", o.lost_sigma_xy_m, 1e-3, 1e4);
   o.lost_sigma_yaw_rad = param(nh, "lost_sigma_yaw_rad", o.lost_sigma_yaw_rad, 1e-4, 3.2);
   o.unknown_z_sigma_m = param(nh, "unknown_z_sigma_m", o.unknown_z_sigma_m, 1e-3, 1000.0);

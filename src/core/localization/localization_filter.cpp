@@ -1,6 +1,7 @@
 #include "gmm_localization/core/localization/localization_filter.h"
 
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 
 #include "gmm_localization/core/common/option_checks.h"
@@ -36,6 +37,7 @@ std::string FilterPolicyOptions::validate() const {
        {rangeProblem("gate_lockout_count", gate_lockout_count, 1, 1e6),
         rangeProblem("relocalize_sigma_xy_m", relocalize_sigma_xy_m, 1e-3, 1000.0),
         rangeProblem("relocalize_sigma_yaw_rad", relocalize_sigma_yaw_rad, 1e-4, 3.2),
+        rangeProblem("max_start_sigma_yaw_rad", max_start_sigma_yaw_rad, 1e-4, 1e3),
         rangeProblem("lost_sigma_xy_m", lost_sigma_xy_m, 1e-3, 1e4),
         rangeProblem("lost_sigma_yaw_rad", lost_sigma_yaw_rad, 1e-4, 3.2),
         rangeProblem("unknown_z_sigma_m", unknown_z_sigma_m, 1e-3, 1000.0),
@@ -70,6 +72,8 @@ const char* filterEventName(FilterEventKind kind) {
       return "matcher_relocalizing";
     case FilterEventKind::kMatcherLost:
       return "matcher_lost";
+    case FilterEventKind::kStartDeferred:
+      return "start_deferred";
   }
   return "?";
 }
@@ -335,6 +339,16 @@ Status LocalizationFilter::setInitialPose(const Pose6& pose_in, const Matrix6d& 
   Pose6 pose = pose_in;
   Matrix6d c = 0.5 * (covariance + covariance.transpose());
   if (!c.allFinite()) return Status::failure("initial pose covariance is not finite");
+  const double max_yaw_var = options_.max_start_sigma_yaw_rad * options_.max_start_sigma_yaw_rad;
+  if (!active_ && options_.initialize_from_match && c(kStateYaw, kStateYaw) > max_yaw_var) {
+    char detail[160];
+    std::snprintf(detail, sizeof detail,
+                  "initial pose with a heading sigma of %.2f rad (> max_start_sigma_yaw_rad "
+                  "%.2f): the first accepted match starts the filter",
+                  std::sqrt(c(kStateYaw, kStateYaw)), options_.max_start_sigma_yaw_rad);
+    event(FilterEventKind::kStartDeferred, stamp_s, detail);
+    return Status::success();
+  }
   const double vxy = options_.relocalize_sigma_xy_m * options_.relocalize_sigma_xy_m;
   const double vh = options_.relocalize_sigma_yaw_rad * options_.relocalize_sigma_yaw_rad;
   for (int i : {kStateX, kStateY, kStateYaw}) {

@@ -335,3 +335,44 @@ TEST(LocalizationFilter, FirstMatchOlderThanTheKeptMotionIsRefused) {
 
 }  // namespace
 }  // namespace gmm_localization
+
+namespace gmm_localization {
+namespace {
+
+TEST(LocalizationFilter, AnInitialPoseWithoutAHeadingWaitsForTheFirstMatch) {
+  // A pose whose heading is unknown (the global start's windows: sigma pi) would dead-reckon the
+  // INS in an unknown direction: it does not start the filter, the first match does. A pose
+  // with a heading starts it, and a running filter still takes one without.
+  auto created = LocalizationFilter::create(EkfOptions(), FilterPolicyOptions());
+  ASSERT_TRUE(created.ok()) << created.error();
+  LocalizationFilter f = std::move(created).value();
+  Matrix6d no_heading = Matrix6d::Identity() * 300.0;
+  no_heading(5, 5) = M_PI * M_PI;
+  Pose6 guess;
+  guess.x = 100.0;
+  ASSERT_TRUE(f.setInitialPose(guess, no_heading, 1.0, false).ok());
+  EXPECT_FALSE(f.active());
+  const auto events = f.takeEvents();
+  ASSERT_EQ(events.size(), 1u);
+  EXPECT_EQ(events[0].kind, FilterEventKind::kStartDeferred);
+  EXPECT_NE(events[0].detail.find("first accepted match"), std::string::npos) << events[0].detail;
+
+  Pose6 match;
+  match.x = 140.0;
+  EXPECT_TRUE(f.addMatch(1.5, match, Matrix6d::Identity() * 1e-4).fused());
+  ASSERT_TRUE(f.active());
+  EXPECT_EQ(f.takeEvents().front().kind, FilterEventKind::kInitializedFromMatch);
+  ASSERT_TRUE(f.setInitialPose(guess, no_heading, 2.0, false).ok());  // running: taken
+  EXPECT_EQ(f.takeEvents().front().kind, FilterEventKind::kInitializedFromPose);
+
+  auto other = LocalizationFilter::create(EkfOptions(), FilterPolicyOptions());
+  ASSERT_TRUE(other.ok());
+  LocalizationFilter g = std::move(other).value();
+  Matrix6d with_heading = no_heading;
+  with_heading(5, 5) = 0.5 * 0.5;  // under max_start_sigma_yaw_rad (0.52)
+  ASSERT_TRUE(g.setInitialPose(guess, with_heading, 1.0, false).ok());
+  EXPECT_TRUE(g.active());
+}
+
+}  // namespace
+}  // namespace gmm_localization

@@ -60,6 +60,12 @@ struct FilterPolicyOptions {
   /// 12.5 m / 15 deg, anything above 4.2 m / 0.087 rad searches the maximum window.
   double relocalize_sigma_xy_m = 6.0;
   double relocalize_sigma_yaw_rad = 0.13;
+  /// An initial pose whose heading sigma exceeds this does not start a filter that is not
+  /// running (with initialize_from_match): its heading is unknown, so dead-reckoning the INS
+  /// from it would publish a pose moving in an unknown direction; the first accepted match
+  /// starts the filter instead (kStartDeferred). 0.52 rad: the heading 3 sigma of 90 deg from
+  /// which the matcher searches the full turn. A running filter still takes such a pose.
+  double max_start_sigma_yaw_rad = 0.52;
   /// x, y and yaw standard deviations while the matcher is lost [m], [rad]: at least the global
   /// window (the matcher's window/global_max_half_xy_m, 50 m, as 3 sigma); yaw: a full turn is
   /// beyond a Gaussian, 1.05 rad puts a 90 deg error at 1.5 sigma.
@@ -97,6 +103,7 @@ enum class FilterEventKind {
   kRelocalizeRequest,    ///< covariance inflated on request
   kMatcherRelocalizing,  ///< covariance inflated: the matcher no longer confirms the estimate
   kMatcherLost,          ///< covariance inflated to the lost sigmas: the matcher is lost
+  kStartDeferred,        ///< an initial pose without a heading: the first match starts it
 };
 const char* filterEventName(FilterEventKind kind);
 
