@@ -41,6 +41,8 @@ void toStatusMsg(const MatchReport& r, const std::string& map_frame, double late
   msg.reason = r.reason;
   msg.prior_source = priorSourceName(r.prior.source);
   msg.prior_mode = priorModeName(r.mode_after);
+  msg.window_x_m = r.prior.valid() ? safe(r.prior.pose.x) : 0.0;
+  msg.window_y_m = r.prior.valid() ? safe(r.prior.pose.y) : 0.0;
   msg.window_half_x_m = safe(r.window.half_x_m);
   msg.window_half_y_m = safe(r.window.half_y_m);
   msg.window_half_heading_rad = safe(r.window.half_heading_rad);
@@ -66,10 +68,13 @@ void toStatusMsg(const MatchReport& r, const std::string& map_frame, double late
   msg.protection_xy_m = r.has_result ? safe(r.result.protection_xy_m) : 0.0;
   msg.protection_heading_rad = r.has_result ? safe(r.result.protection_heading_rad) : 0.0;
   msg.certificate_evaluations = r.has_result ? static_cast<uint64_t>(cert.evaluations) : 0;
-  msg.global_search = r.has_result && r.result.global;
-  msg.global_certified = msg.global_search && r.result.global_certificate.certified;
+  // A lost prior's window is the global search's: searched (not skipped) even when the search
+  // stopped at its budget or found the window off the map, which leaves no result.
+  const bool global_result = r.has_result && r.result.global;
+  msg.global_search = global_result || (r.prior.lost && r.outcome != MatchOutcome::kSkipped);
+  msg.global_certified = global_result && r.result.global_certificate.certified;
   msg.global_separation_per_point =
-      msg.global_search ? safe(r.result.global_certificate.separation_per_point) : 0.0;
+      global_result ? safe(r.result.global_certificate.separation_per_point) : 0.0;
   msg.certificate_ms = 1e3 * safe(r.timing.certificate_s);
   msg.filter_ms = 1e3 * safe(r.timing.filter_s);
   msg.search_ms = 1e3 * safe(r.timing.search_s);

@@ -101,6 +101,35 @@ TEST(MatcherOutputs, StatusOfAnAcceptedAndARejectedScan) {
   toStatusMsg(nothing, "map", 0.0, 0, s);
   EXPECT_EQ(s.prior_source, "none");
   EXPECT_DOUBLE_EQ(s.pose.pose.orientation.w, 1.0);
+  EXPECT_EQ(s.window_x_m, 0.0);
+  EXPECT_FALSE(s.global_search);
+}
+
+TEST(MatcherOutputs, AGlobalWindowIsReportedAsSuchWithOrWithoutAResult) {
+  // The global start tells its window's answer from the others by global_search and the
+  // window's centre; a search stopped at its budget (or cancelled) leaves no result.
+  MatchReport r = acceptedReport();
+  r.outcome = MatchOutcome::kRejected;
+  r.reason = "search stopped at its budget";
+  r.has_result = false;
+  r.prior.lost = true;
+  r.prior.pose.y = -4.0;
+  r.window = {50.0, 50.0, M_PI};
+  MatchStatus s;
+  toStatusMsg(r, "map", 0.0, 0, s);
+  EXPECT_TRUE(s.global_search);
+  EXPECT_FALSE(s.global_certified);
+  EXPECT_EQ(s.global_separation_per_point, 0.0);
+  EXPECT_DOUBLE_EQ(s.window_x_m, 0.9);
+  EXPECT_DOUBLE_EQ(s.window_y_m, -4.0);
+  EXPECT_DOUBLE_EQ(s.window_half_x_m, 50.0);
+  r.outcome = MatchOutcome::kSkipped;  // not searched (another global search runs)
+  toStatusMsg(r, "map", 0.0, 0, s);
+  EXPECT_FALSE(s.global_search);
+  r = acceptedReport();  // a tracking window
+  toStatusMsg(r, "map", 0.0, 0, s);
+  EXPECT_FALSE(s.global_search);
+  EXPECT_DOUBLE_EQ(s.window_x_m, 0.9);
 }
 
 TEST(MatcherOutputs, PoseOnlyWhenAcceptedAndFinite) {
