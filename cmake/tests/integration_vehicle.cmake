@@ -15,6 +15,8 @@
 #  - vehicle_bad_input:  localization.launch against the bad-input matrix (bad clouds, stamps,
 #                        NaN inputs, a rogue map index, broken map directories) while it drives;
 #  - vehicle_gnss_start: localization.launch gnss_initializer:=true started from GNSS fixes;
+#  - vehicle_global_start: replay.launch global_start:=true with no pose at all: the global
+#                        window swept over the map finds the vehicle;
 #  - vehicle_external_filter: localization.launch ekf:=false prior_topic:=/odometry/filtered with
 #                        a stand-in for robot_localization (wiring, TF, config/robot_localization
 #                        .yaml), and vehicle_ekf_no_tf (same binary): ekf_publish_tf:=false;
@@ -34,6 +36,7 @@ roslaunch_add_file_check(launch/localization.launch map:=/tmp/no_map ins_adapter
 roslaunch_add_file_check(launch/localization.launch map:=/tmp/no_map ekf:=false
   prior_topic:=/odometry/filtered gnss_initializer:=true gnss_heading_topic:=/gnss/heading)
 roslaunch_add_file_check(launch/replay.launch map:=/tmp/no_map bag:=/tmp/no.bag)
+roslaunch_add_file_check(launch/localization.launch map:=/tmp/no_map global_start:=true)
 roslaunch_add_file_check(launch/localization.launch map:=/tmp/no_map method:=fused
   use_initial_pose:=true)
 roslaunch_add_file_check(launch/replay.launch map:=/tmp/no_map bag:=/tmp/no.bag
@@ -54,8 +57,9 @@ if(TARGET tests)
 endif()
 
 set(GMM_VEHICLE_NODELETS gmm_map_server_nodelet gmm_matcher_nodelet gmm_ekf_nodelet
-  gmm_cloud_merger_nodelet gmm_gnss_initializer_nodelet gmm_ins_adapter_nodelet)
-foreach(name nodelets replay stale_start robustness kidnap bad_input gnss_start
+  gmm_cloud_merger_nodelet gmm_gnss_initializer_nodelet gmm_ins_adapter_nodelet
+  gmm_global_start_nodelet)
+foreach(name nodelets replay stale_start robustness kidnap bad_input gnss_start global_start
     external_filter ins_adapter fused fused_waiting)
   add_executable(rostest_vehicle_${name} EXCLUDE_FROM_ALL
     test/integration/vehicle_${name}_test.cpp)

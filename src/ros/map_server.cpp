@@ -50,6 +50,7 @@ MapServer::MapServer(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string&
 
   tf_listener_ = std::make_unique<tf2_ros::TransformListener>(tf_buffer_, nh_);
   pose_hint_sub_ = nh_.subscribe("pose_hint", 1, &MapServer::onPoseHint, this);
+  region_hint_sub_ = nh_.subscribe("region_hint", 1, &MapServer::onPoseHint, this);
   load_map_srv_ = nh_.advertiseService("load_map", &MapServer::onLoadMap, this);
   setUpDiagnostics();
   update_timer_ = nh_.createWallTimer(ros::WallDuration(options_.update_period_s),
@@ -73,6 +74,7 @@ MapServer::~MapServer() {
   // then the connect thread; the publishers they use go last, with the members.
   update_timer_.stop();
   pose_hint_sub_.shutdown();
+  region_hint_sub_.shutdown();
   load_map_srv_.shutdown();
   diagnostics_.reset();
   engine_.reset();

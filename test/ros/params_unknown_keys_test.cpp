@@ -14,6 +14,7 @@
 #include "evaluate/evaluate_yaml.h"
 #include "gmm_localization/ros/cloud_merger_options.h"
 #include "gmm_localization/ros/ekf_node_options.h"
+#include "gmm_localization/ros/global_start_options.h"
 #include "gmm_localization/ros/gnss_initializer_options.h"
 #include "gmm_localization/ros/ins_adapter_options.h"
 #include "gmm_localization/ros/map_server_options.h"
@@ -57,6 +58,8 @@ XmlRpcValue shipped(const std::string& file) {
     set("driver_preset", XmlRpcValue(std::string("clearpath_applanix_bridge")));
     set("odom_frame", XmlRpcValue(std::string("odom")));
     set("base_frame", XmlRpcValue(std::string("base_link")));
+  } else if (file == "global_start.yaml") {
+    set("map_frame", XmlRpcValue(std::string("map")));
   } else if (file == "gnss_initializer.yaml") {
     set("heading_topic", XmlRpcValue(std::string("/gnss/heading")));
     set("map_frame", XmlRpcValue(std::string("map")));
@@ -84,6 +87,8 @@ TEST(UnknownParams, ShippedConfigsAndLaunchKeysGiveNoWarning) {
   EXPECT_EQ(warningsOf(loadInsAdapterOptions, shipped("ins_adapter.yaml")),
             std::vector<std::string>{});
   EXPECT_EQ(warningsOf(loadGnssInitializerOptions, shipped("gnss_initializer.yaml")),
+            std::vector<std::string>{});
+  EXPECT_EQ(warningsOf(loadGlobalStartOptions, shipped("global_start.yaml")),
             std::vector<std::string>{});
   // Every key of each file is one its loader read (not merely covered by a namespace).
   const ParamSource src = source(shipped("matcher.yaml"));

@@ -20,6 +20,8 @@
 //               intensity (= number of components) sigma.
 //   pose_hint   (subscribed) geometry_msgs/PoseWithCovarianceStamped in map_frame, e.g. rviz's
 //               /initialpose: where to serve chunks while TF cannot say.
+//   region_hint (subscribed) the same from the global start (global_start.h): the window it is
+//               about to search, served before its pose goes out on /initialpose.
 // Service:
 //   load_map    gmm_localization/LoadMap: switch to another map directory (or reload this
 //               one). Every tile is read first (map_server_load.h): a directory whose tiles are
@@ -106,7 +108,7 @@ class MapServer {
 
   tf2_ros::Buffer tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
-  ros::Subscriber pose_hint_sub_;
+  ros::Subscriber pose_hint_sub_, region_hint_sub_;
   ros::Publisher chunk_pub_, index_pub_, cloud_pub_;
   ros::ServiceServer load_map_srv_;
   ros::WallTimer update_timer_;
