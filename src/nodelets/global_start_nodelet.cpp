@@ -14,8 +14,7 @@ class GlobalStartNodelet : public nodelet::Nodelet {
  private:
   void onInit() override {
     try {
-      start_ =
-          std::make_unique<GlobalStart>(getNodeHandle(), getPrivateNodeHandle(), getName());
+      start_ = std::make_unique<GlobalStart>(getNodeHandle(), getPrivateNodeHandle(), getName());
     } catch (const std::exception& e) {
       // The nodelet loader reports exceptions at DEBUG level only: say it loudly first.
       NODELET_FATAL("global_start: %s", e.what());

@@ -51,6 +51,15 @@ void FrequencyMonitor::fill(StatusBuilder& s) {
   if (stamped_) run(*stamps_);
 }
 
+void ProblemLog::report(const std::string& what) {
+  last_ = what;
+  const double now = wallNow();
+  time_s_ = now;
+  if (now - log_s_ < 5.0) return;
+  log_s_ = now;
+  ROS_WARN("%s: %s", name_.c_str(), what.c_str());
+}
+
 std::string silenceText(bool ever_heard, double silent_for_s) {
   char buf[64];
   std::snprintf(buf, sizeof(buf), ever_heard ? "for %.1f s" : "in the %.1f s since start-up",

@@ -39,14 +39,15 @@ GlobalStart::GlobalStart(ros::NodeHandle nh, ros::NodeHandle pnh, const std::str
       pnh_(pnh),
       name_(name),
       options_(loadNodeletOptions(pnh, name, loadGlobalStartOptions)),
-      sweep_(options_.sweep) {
+      sweep_(options_.sweep),
+      problems_(name) {
   pose_pub_ = nh_.advertise<geometry_msgs::PoseWithCovarianceStamped>("initialpose", 2);
   hint_pub_ = nh_.advertise<geometry_msgs::PoseWithCovarianceStamped>("region_hint", 2);
   index_sub_ = nh_.subscribe("map_index", 4, &GlobalStart::onIndex, this);
   status_sub_ = nh_.subscribe("status", 20, &GlobalStart::onStatus, this);
   pose_sub_ = nh_.subscribe("initialpose", 4, &GlobalStart::onInitialPose, this);
-  timer_ = nh_.createWallTimer(ros::WallDuration(options_.poll_period_s), &GlobalStart::onTimer,
-                               this);
+  timer_ =
+      nh_.createWallTimer(ros::WallDuration(options_.poll_period_s), &GlobalStart::onTimer, this);
   setUpDiagnostics();
   const StartSweepOptions& s = options_.sweep;
   ROS_INFO(
@@ -68,15 +69,6 @@ GlobalStart::~GlobalStart() {
   diagnostics_.reset();  // its task reads members destroyed before it
 }
 
-void GlobalStart::problem(const std::string& what) {
-  last_problem_ = what;
-  const double now = wallNow();
-  last_problem_time_s_ = now;
-  if (now - last_log_s_ < 5.0) return;
-  last_log_s_ = now;
-  ROS_WARN("%s: %s", name_.c_str(), what.c_str());
-}
-
 void GlobalStart::setMap(const MapIndex& index) {
   const MapGeometry geometry = geometryOf(index);
   std::vector<TileId> tiles;
@@ -87,16 +79,16 @@ void GlobalStart::setMap(const MapIndex& index) {
   } else {
     tiles = extentTiles(index, geometry);
     tiles_source_ = "the index's extent (manifest not readable here: " + store.error() + ")";
-    problem("map '" + index.map_directory + "': " + tiles_source_);
+    problems_.report("map '" + index.map_directory + "': " + tiles_source_);
   }
   std::sort(tiles.begin(), tiles.end());
   planner_ = std::make_unique<ChunkPlanner>(geometry, rasterOptionsOf(index), tiles);
   auto windows = sweepWindowCentres(tileSquares(geometry, tiles), options_.sweep);
   if (windows.empty()) {
-    problem("map '" + index.map_directory + "': no window to sweep (" +
-            (tiles.empty() ? std::string("no tile")
-                           : "no tile within region/radius_m of region/centre") +
-            ")");
+    problems_.report("map '" + index.map_directory + "': no window to sweep (" +
+                     (tiles.empty() ? std::string("no tile")
+                                    : "no tile within region/radius_m of region/centre") +
+                     ")");
   } else {
     ROS_INFO("%s: map '%s': %zu window(s) of +-%.0f m to sweep (tiles from the %s), first at %s",
              name_.c_str(), index.map_directory.c_str(), windows.size(),
@@ -168,7 +160,8 @@ geometry_msgs::PoseWithCovarianceStamped GlobalStart::windowPose(const Eigen::Ve
   e.x_m = centre.x();
   e.y_m = centre.y();
   const double sigma_xy = options_.sweep.window_half_xy_m / 3.0;
-  e.cov_xy_yaw = Eigen::Vector3d(sigma_xy * sigma_xy, sigma_xy * sigma_xy, M_PI * M_PI).asDiagonal();
+  e.cov_xy_yaw =
+      Eigen::Vector3d(sigma_xy * sigma_xy, sigma_xy * sigma_xy, M_PI * M_PI).asDiagonal();
   return initialPoseMsg(e, options_.map_frame);
 }
 
@@ -179,13 +172,13 @@ void GlobalStart::onTimer(const ros::WallTimerEvent&) {
   const auto action = sweep_.poll(wallNow(), windowLoaded());
   const int n = static_cast<int>(sweep_.windows().size());
   if (action.kind == StartSweep::Action::Kind::kLoadMap) {
-    window_chunks_ = planner_ ? windowChunks(*planner_, action.centre,
-                                             options_.sweep.window_half_xy_m)
-                              : std::vector<ChunkId>{};
+    window_chunks_ = planner_
+                         ? windowChunks(*planner_, action.centre, options_.sweep.window_half_xy_m)
+                         : std::vector<ChunkId>{};
     hint_pub_.publish(windowPose(action.centre, stamp));
-    ROS_INFO("%s: no pose: window %d of %d (pass %d) at %s, loading its %zu chunks",
-             name_.c_str(), action.window + 1, n, sweep_.sweeps() + 1,
-             centreText(action.centre).c_str(), window_chunks_.size());
+    ROS_INFO("%s: no pose: window %d of %d (pass %d) at %s, loading its %zu chunks", name_.c_str(),
+             action.window + 1, n, sweep_.sweeps() + 1, centreText(action.centre).c_str(),
+             window_chunks_.size());
   } else if (action.kind == StartSweep::Action::Kind::kSearch) {
     sent_ = windowPose(action.centre, stamp);
     pose_pub_.publish(*sent_);
@@ -193,11 +186,11 @@ void GlobalStart::onTimer(const ros::WallTimerEvent&) {
              action.window + 1, n, centreText(action.centre).c_str(),
              options_.sweep.window_half_xy_m,
              windowLoaded() ? "" : " before all its chunks came (map_wait_s)");
-  } else if (before != StartSweep::State::kGaveUp &&
-             sweep_.state() == StartSweep::State::kGaveUp) {
-    problem("no match accepted in " + std::to_string(sweep_.sweeps()) + " passes over " +
-            std::to_string(n) +
-            " windows: giving up (max_sweeps); give a pose in rviz or check the map and the scans");
+  } else if (before != StartSweep::State::kGaveUp && sweep_.state() == StartSweep::State::kGaveUp) {
+    problems_.report(
+        "no match accepted in " + std::to_string(sweep_.sweeps()) + " passes over " +
+        std::to_string(n) +
+        " windows: giving up (max_sweeps); give a pose in rviz or check the map and the scans");
   }
 }
 
@@ -223,11 +216,11 @@ void GlobalStart::setUpDiagnostics() {
     s.add("searches without an answer in time", sweep_.timedOut());
     s.add("matcher answers received", statuses_);
     if (state == StartSweep::State::kGaveUp) {
-      s.summary(DiagnosticStatus::ERROR, "gave up (max_sweeps): " + last_problem_);
+      s.summary(DiagnosticStatus::ERROR, "gave up (max_sweeps): " + problems_.last());
     } else if (map_directory_.empty()) {
       s.summary(DiagnosticStatus::WARN, "no map index yet (is the map server running?)");
-    } else if (wallNow() - last_problem_time_s_ < kRecentProblemS) {
-      s.summary(DiagnosticStatus::WARN, last_problem_);
+    } else if (problems_.recent()) {
+      s.summary(DiagnosticStatus::WARN, problems_.last());
     } else {
       s.summary(DiagnosticStatus::OK, StartSweep::stateName(state));
     }

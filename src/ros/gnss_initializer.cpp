@@ -56,7 +56,8 @@ GnssInitializer::GnssInitializer(ros::NodeHandle nh, ros::NodeHandle pnh, const 
       name_(name),
       options_(loadNodeletOptions(pnh, name, loadGnssInitializerOptions)),
       fix_rate_(0.0, std::numeric_limits<double>::infinity()),
-      initial_pose_(options_.pose) {
+      initial_pose_(options_.pose),
+      problems_(name) {
   start_wall_s_ = wallNow();
   tf_listener_ = std::make_unique<tf2_ros::TransformListener>(tf_buffer_, nh_);
   pose_pub_ = nh_.advertise<geometry_msgs::PoseWithCovarianceStamped>("initialpose", 2);
@@ -82,15 +83,6 @@ GnssInitializer::~GnssInitializer() {
   diagnostics_.reset();  // its task reads members destroyed before it
 }
 
-void GnssInitializer::problem(const std::string& what) {
-  last_problem_ = what;
-  const double now = wallNow();
-  last_problem_time_s_ = now;
-  if (now - last_log_s_ < 5.0) return;
-  last_log_s_ = now;
-  ROS_WARN("%s: %s", name_.c_str(), what.c_str());
-}
-
 bool GnssInitializer::leverArm(const std::string& antenna_frame, Eigen::Vector3d& out) {
   out.setZero();
   if (!options_.lever_arm_from_tf || antenna_frame.empty() ||
@@ -103,9 +95,9 @@ bool GnssInitializer::leverArm(const std::string& antenna_frame, Eigen::Vector3d
                           t.transform.translation.z);
     return out.allFinite();
   } catch (const tf2::TransformException& e) {
-    problem("fix not used: no TF " + options_.base_frame + " <- " + antenna_frame +
-            " (the antenna's lever arm): publish it as a static transform, or set " +
-            pnh_.resolveName("lever_arm_from_tf") + " false (" + e.what() + ")");
+    problems_.report("fix not used: no TF " + options_.base_frame + " <- " + antenna_frame +
+                     " (the antenna's lever arm): publish it as a static transform, or set " +
+                     pnh_.resolveName("lever_arm_from_tf") + " false (" + e.what() + ")");
     return false;
   }
 }
@@ -123,8 +115,8 @@ void GnssInitializer::onHeading(const sensor_msgs::Imu::ConstPtr& msg) {
     } catch (const tf2::TransformException& e) {
       std::lock_guard<std::mutex> lock(mutex_);
       ++headings_refused_;
-      problem("heading not used: no TF " + msg->header.frame_id + " <- " + options_.base_frame +
-              " (" + e.what() + ")");
+      problems_.report("heading not used: no TF " + msg->header.frame_id + " <- " +
+                       options_.base_frame + " (" + e.what() + ")");
       return;
     }
   }
@@ -132,8 +124,8 @@ void GnssInitializer::onHeading(const sensor_msgs::Imu::ConstPtr& msg) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (!h || !initial_pose_.addHeading(*h)) {
     ++headings_refused_;
-    problem("heading on " + nh_.resolveName(options_.heading_topic) +
-            " not used: " + (h ? std::string("not finite") : h.error()));
+    problems_.report("heading on " + nh_.resolveName(options_.heading_topic) +
+                     " not used: " + (h ? std::string("not finite") : h.error()));
     return;
   }
   ++headings_;
@@ -145,7 +137,7 @@ void GnssInitializer::onIndex(const MapIndex::ConstPtr& msg) {
   if (!have_index_ || msg->map_directory != map_directory_) {
     initial_pose_.reset();
     if (!g.hasGrid()) {
-      problem(withHint(
+      problems_.report(withHint(
           "map '" + msg->map_directory + "': " +
           (g.present ? "its georeference names no UTM zone" : "the map has no georeference")));
     } else {
@@ -181,11 +173,12 @@ void GnssInitializer::onFix(const sensor_msgs::NavSatFix::ConstPtr& msg) {
   if (state_ == State::kSent && (now - sent_at_).toSec() > options_.retry_s) {
     if (options_.max_attempts > 0 && attempts_ >= options_.max_attempts) {
       state_ = State::kGaveUp;
-      problem("no match accepted after " + std::to_string(attempts_) +
-              " GNSS poses: giving up (max_attempts); give a pose in rviz or check the map");
+      problems_.report(
+          "no match accepted after " + std::to_string(attempts_) +
+          " GNSS poses: giving up (max_attempts); give a pose in rviz or check the map");
     } else {
       state_ = State::kWaiting;
-      problem("no match accepted within retry_s of the GNSS pose: sending a newer one");
+      problems_.report("no match accepted within retry_s of the GNSS pose: sending a newer one");
     }
   }
   if (state_ != State::kWaiting) return;
@@ -193,7 +186,7 @@ void GnssInitializer::onFix(const sensor_msgs::NavSatFix::ConstPtr& msg) {
     ++refused_;
     last_refusal_ =
         "no map index yet on " + nh_.resolveName("map_index") + " (is the map server running?)";
-    problem("fix not used: " + last_refusal_);
+    problems_.report("fix not used: " + last_refusal_);
     return;
   }
   Eigen::Vector3d lever;
@@ -207,7 +200,7 @@ void GnssInitializer::onFix(const sensor_msgs::NavSatFix::ConstPtr& msg) {
   if (!e) {
     ++refused_;
     last_refusal_ = withHint(e.error());
-    problem("fix not used: " + last_refusal_);
+    problems_.report("fix not used: " + last_refusal_);
     return;
   }
   pose_pub_.publish(initialPoseMsg(*e, options_.map_frame));
@@ -228,8 +221,9 @@ void GnssInitializer::onTimer(const ros::WallTimerEvent&) {
   const bool heard = last_fix_wall_s_ >= 0.0;
   const double silent = wallNow() - (heard ? last_fix_wall_s_ : start_wall_s_);
   if (silent > options_.fix_timeout_s) {
-    problem("no NavSatFix on " + nh_.resolveName("fix") + " " + silenceText(heard, silent) +
-            ": check the launch argument gnss_fix_topic and the receiver driver");
+    problems_.report("no NavSatFix on " + nh_.resolveName("fix") + " " +
+                     silenceText(heard, silent) +
+                     ": check the launch argument gnss_fix_topic and the receiver driver");
   }
 }
 
@@ -252,9 +246,8 @@ void GnssInitializer::setUpDiagnostics() {
     if (!last_refusal_.empty()) s.add("last refusal", last_refusal_);
     if (state_ == State::kGaveUp) {
       s.summary(DiagnosticStatus::ERROR, stateName(state_));
-    } else if ((state_ == State::kWaiting || state_ == State::kSent) &&
-               wallNow() - last_problem_time_s_ < kRecentProblemS) {
-      s.summary(DiagnosticStatus::WARN, last_problem_);
+    } else if ((state_ == State::kWaiting || state_ == State::kSent) && problems_.recent()) {
+      s.summary(DiagnosticStatus::WARN, problems_.last());
     } else {
       s.summary(DiagnosticStatus::OK, stateName(state_));
     }

@@ -21,7 +21,8 @@ InsAdapter::InsAdapter(ros::NodeHandle nh, ros::NodeHandle pnh, const std::strin
       name_(name),
       // No rate is expected of the INS: only "No events recorded." (and stamps).
       input_rate_(0.0, std::numeric_limits<double>::infinity()),
-      adapter_(loadNodeletOptions(pnh, name, loadInsAdapterOptions)) {
+      adapter_(loadNodeletOptions(pnh, name, loadInsAdapterOptions)),
+      problems_(name) {
   const InsAdapterOptions& o = adapter_.options();
   tf_listener_ = std::make_unique<tf2_ros::TransformListener>(tf_buffer_, nh_);
   if (o.publish_tf) tf_broadcaster_ = std::make_unique<tf2_ros::TransformBroadcaster>();
@@ -41,15 +42,6 @@ InsAdapter::~InsAdapter() {
   diagnostics_.reset();  // its task reads members destroyed before it
 }
 
-void InsAdapter::problem(const std::string& what) {
-  last_problem_ = what;
-  const double now = wallNow();
-  last_problem_time_s_ = now;
-  if (now - last_log_s_ < 5.0) return;
-  last_log_s_ = now;
-  ROS_WARN("%s: %s", name_.c_str(), what.c_str());
-}
-
 void InsAdapter::onOdometry(const nav_msgs::Odometry::ConstPtr& msg) {
   input_rate_.tick();
   input_rate_.stamp(msg->header.stamp);
@@ -60,26 +52,26 @@ void InsAdapter::onOdometry(const nav_msgs::Odometry::ConstPtr& msg) {
   switch (r.outcome) {
     case InsAdapterOutcome::kNoTransform:
       ++no_tf_;
-      problem("INS odometry dropped: " + r.reason);
+      problems_.report("INS odometry dropped: " + r.reason);
       return;
     case InsAdapterOutcome::kInvalid:
       ++invalid_;
-      problem("INS odometry dropped: " + r.reason);
+      problems_.report("INS odometry dropped: " + r.reason);
       return;
     case InsAdapterOutcome::kOutOfOrder:
       ++out_of_order_;
-      problem("INS odometry dropped: " + r.reason);
+      problems_.report("INS odometry dropped: " + r.reason);
       return;
     case InsAdapterOutcome::kPublished:
       break;
   }
   if (r.step == InsOdometryStep::kRestarted) {
     ++restarts_;
-    problem("INS odometry went back in time: odom restarted at base_link");
+    problems_.report("INS odometry went back in time: odom restarted at base_link");
   } else if (r.step == InsOdometryStep::kIntegratedOverGap) {
     ++gaps_;
-    problem("INS odometry gap of " + std::to_string(r.dt_s) +
-            " s (integrated with the mean twist)");
+    problems_.report("INS odometry gap of " + std::to_string(r.dt_s) +
+                     " s (integrated with the mean twist)");
   }
   ++published_;
   pub_.publish(r.odometry);
@@ -110,11 +102,11 @@ void InsAdapter::setUpDiagnostics() {
     s.add("dropped: out of order", out_of_order_);
     s.add("restarts (time went backwards)", restarts_);
     s.add("gaps", gaps_);
-    if (!last_problem_.empty()) s.add("last problem", last_problem_);
+    if (!problems_.last().empty()) s.add("last problem", problems_.last());
     if (received_ == 0) {
       s.summary(DiagnosticStatus::WARN, "no INS odometry received yet");
-    } else if (wallNow() - last_problem_time_s_ < kRecentProblemS) {
-      s.summary(DiagnosticStatus::WARN, last_problem_);
+    } else if (problems_.recent()) {
+      s.summary(DiagnosticStatus::WARN, problems_.last());
     }
     lock.unlock();
     input_rate_.fill(s);

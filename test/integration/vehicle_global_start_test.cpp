@@ -44,24 +44,10 @@ TEST(VehicleGlobalStart, FindsTheVehicleWithNoPoseAndReportsNothingWrongAsGood) 
   double end_stamp = NAN;
   ASSERT_TRUE(ros::param::get("~end_stamp", end_stamp));
   const ros::WallTime begin = ros::WallTime::now();
-  ASSERT_TRUE(waitFor(
-      [&] {
-        return outputs.locked(
-            [&] { return !outputs.truth_.empty() && outputs.truth_.last() >= end_stamp - 0.02; });
-      },
-      180.0))
-      << "the bag never reached its end";
-  ros::WallDuration(3.0).sleep();  // the last scans' statuses
-
-  std::vector<MatchStatus> st;
-  std::vector<nav_msgs::Odometry> od;
-  Truth truth;
-  outputs.locked([&] {
-    st = outputs.statuses_;
-    od = outputs.odometry_;
-    truth = outputs.truth_;
-    return 0;
-  });
+  DriveRecord drive;
+  ASSERT_TRUE(recordDrive(outputs, end_stamp, 180.0, &drive)) << "the bag never reached its end";
+  const std::vector<MatchStatus>& st = drive.statuses;
+  const Truth& truth = drive.truth;
   std::vector<geometry_msgs::PoseWithCovarianceStamped> sent;
   {
     std::lock_guard<std::mutex> lock(poses_mutex);
@@ -75,40 +61,29 @@ TEST(VehicleGlobalStart, FindsTheVehicleWithNoPoseAndReportsNothingWrongAsGood) 
     EXPECT_NEAR(p.pose.covariance[35], M_PI * M_PI, 1e-9);
   }
 
-  size_t accepted = 0;
-  const MatchStatus* first_accepted = nullptr;
-  const MatchStatus* last_accepted = nullptr;
-  double worst_match_m = 0.0;
+  const AcceptedMatches accepted = expectAcceptedWithin(st, truth, kTolXyM);
+  const MatchStatus* first_accepted = accepted.first;
   size_t no_prior = 0, global = 0;
   for (const MatchStatus& s : st) {
     no_prior += s.prior_mode == "no_prior";
     global += s.global_search;
-    if (!s.accepted) continue;
-    ++accepted;
-    if (first_accepted == nullptr) first_accepted = &s;
-    last_accepted = &s;
-    const PoseError e = poseError(truth, s.header.stamp.toSec(), toPose(s.pose.pose));
-    if (!e.valid()) continue;
-    worst_match_m = std::max(worst_match_m, e.xy_m);
-    EXPECT_LE(e.xy_m, kTolXyM) << "a match " << e.xy_m << " m off was accepted (prior "
-                               << s.prior_source << ", window " << s.window_half_x_m << " m)";
   }
   std::printf(
       "[vehicle_global_start] %zu windows sent; %zu statuses (%zu without a prior, %zu global "
       "searches), %zu accepted, the first %.1f s of bag time after the first scan (global %d, "
       "certified %d); worst accepted match %.3f m; %.1f s wall\n",
-      sent.size(), st.size(), no_prior, global, accepted,
+      sent.size(), st.size(), no_prior, global, accepted.count,
       first_accepted ? first_accepted->header.stamp.toSec() - st.front().header.stamp.toSec() : NAN,
       first_accepted ? static_cast<int>(first_accepted->global_search) : -1,
-      first_accepted ? static_cast<int>(first_accepted->certified) : -1, worst_match_m,
+      first_accepted ? static_cast<int>(first_accepted->certified) : -1, accepted.worst_m,
       (ros::WallTime::now() - begin).toSec());
   for (const MatchStatus& s : st) {  // the global searches, as the sweep saw them
     if (!s.global_search) continue;
-    std::printf("[vehicle_global_start] global search of the scan at %.1f s around (%.1f, %.1f) "
-                "+-%.0f m: %s, %.0f ms\n",
-                s.header.stamp.toSec() - st.front().header.stamp.toSec(), s.window_x_m,
-                s.window_y_m, s.window_half_x_m,
-                s.accepted ? "accepted" : s.reason.substr(0, 60).c_str(), s.total_ms);
+    std::printf(
+        "[vehicle_global_start] global search of the scan at %.1f s around (%.1f, %.1f) "
+        "+-%.0f m: %s, %.0f ms\n",
+        s.header.stamp.toSec() - st.front().header.stamp.toSec(), s.window_x_m, s.window_y_m,
+        s.window_half_x_m, s.accepted ? "accepted" : s.reason.substr(0, 60).c_str(), s.total_ms);
   }
   EXPECT_GT(no_prior, 0u) << "the matcher had a prior from the start: not a start without one";
   if (first_accepted == nullptr) {  // what the matcher said instead, in order, runs merged
@@ -134,29 +109,22 @@ TEST(VehicleGlobalStart, FindsTheVehicleWithNoPoseAndReportsNothingWrongAsGood) 
   ASSERT_NE(first_accepted, nullptr) << "never localized";
   EXPECT_TRUE(first_accepted->global_search) << "the first accepted match was not a global search";
   EXPECT_TRUE(first_accepted->certified) << first_accepted->certificate_failure;
-  EXPECT_TRUE(last_accepted->certified) << last_accepted->certificate_failure;
+  EXPECT_TRUE(accepted.last->certified) << accepted.last->certificate_failure;
 
   // The EKF: nothing before the first match, never far from the truth with a small covariance.
+  const std::vector<nav_msgs::Odometry>& od = drive.odometry;
   ASSERT_FALSE(od.empty()) << "no EKF odometry";
   EXPECT_GE(od.front().header.stamp.toSec(), first_accepted->header.stamp.toSec() - 1e-6)
       << "the EKF published a pose before the first accepted match";
-  double worst_ratio = 0.0;
-  for (const nav_msgs::Odometry& o : od) {
-    const PoseError e = poseError(truth, o.header.stamp.toSec(), toPose(o.pose.pose));
-    if (!e.valid()) continue;
-    const double sigma = std::sqrt(o.pose.covariance[0] + o.pose.covariance[7]);
-    const double bound = std::max(kTolXyM, 3.0 * sigma);
-    worst_ratio = std::max(worst_ratio, e.xy_m / bound);
-    EXPECT_LE(e.xy_m, bound) << "EKF estimate " << e.xy_m << " m off with sigma " << sigma
-                             << " m at " << o.header.stamp.toSec();
-  }
+  const double worst_ratio = expectEkfWithinItsSigma(od, truth, kTolXyM);
   std::printf("[vehicle_global_start] EKF: %zu estimates, worst error / max(0.3 m, 3 sigma) %.2f\n",
               od.size(), worst_ratio);
   EXPECT_EQ(outputs.diagnosticValue(kStartDiag, "state"), "localized");
-  std::printf("[vehicle_global_start] global start: %s windows searched, %s before all their "
-              "chunks came\n",
-              outputs.diagnosticValue(kStartDiag, "windows searched").c_str(),
-              outputs.diagnosticValue(kStartDiag, "searched before all their chunks came").c_str());
+  std::printf(
+      "[vehicle_global_start] global start: %s windows searched, %s before all their "
+      "chunks came\n",
+      outputs.diagnosticValue(kStartDiag, "windows searched").c_str(),
+      outputs.diagnosticValue(kStartDiag, "searched before all their chunks came").c_str());
   expectEndsLocalized(outputs, truth, "vehicle_global_start", kTolXyM, kTolYawRad);
   expectNothingNonFinite(outputs);
 }

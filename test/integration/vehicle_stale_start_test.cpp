@@ -45,24 +45,10 @@ TEST(VehicleStaleStart, FindsTheVehicleByItselfAndReportsNothingWrongAsGood) {
   resume.request.data = false;
   ASSERT_TRUE(ros::service::call("/player/pause_playback", resume));
   const ros::WallTime drive_start = ros::WallTime::now();
-  ASSERT_TRUE(waitFor(
-      [&] {
-        return outputs.locked(
-            [&] { return !outputs.truth_.empty() && outputs.truth_.last() >= end_stamp - 0.02; });
-      },
-      120.0))
-      << "the bag never reached its end";
-  ros::WallDuration(3.0).sleep();  // the last scans' statuses
-
-  std::vector<MatchStatus> st;
-  std::vector<nav_msgs::Odometry> od;
-  Truth truth;
-  outputs.locked([&] {
-    st = outputs.statuses_;
-    od = outputs.odometry_;
-    truth = outputs.truth_;
-    return 0;
-  });
+  DriveRecord drive;
+  ASSERT_TRUE(recordDrive(outputs, end_stamp, 120.0, &drive)) << "the bag never reached its end";
+  const std::vector<MatchStatus>& st = drive.statuses;
+  const Truth& truth = drive.truth;
   ASSERT_FALSE(st.empty()) << "no scan was searched";
 
   // The start was stale: the first scan's window did not hold the truth. The first scan of the
@@ -74,47 +60,26 @@ TEST(VehicleStaleStart, FindsTheVehicleByItselfAndReportsNothingWrongAsGood) {
   EXPECT_GT(stale_m, st.front().window_half_x_m)
       << "the vehicle was inside the first window: the test does not test a stale start";
 
-  size_t accepted = 0;
-  const MatchStatus* first_accepted = nullptr;
-  const MatchStatus* last_accepted = nullptr;
-  double worst_match_m = 0.0;
-  for (const MatchStatus& s : st) {
-    if (!s.accepted) continue;
-    ++accepted;
-    if (first_accepted == nullptr) first_accepted = &s;
-    last_accepted = &s;
-    const PoseError e = poseError(truth, s.header.stamp.toSec(), toPose(s.pose.pose));
-    if (!e.valid()) continue;
-    worst_match_m = std::max(worst_match_m, e.xy_m);
-    EXPECT_LE(e.xy_m, kTolXyM) << "a match " << e.xy_m << " m off was accepted (prior "
-                               << s.prior_source << ", window " << s.window_half_x_m << " m)";
-  }
+  const AcceptedMatches accepted = expectAcceptedWithin(st, truth, kTolXyM);
+  const MatchStatus* first_accepted = accepted.first;
+  const MatchStatus* last_accepted = accepted.last;
   std::printf(
       "[vehicle_stale_start] %.1f m stale; %zu statuses, %zu accepted, first accepted %.1f s "
       "after the first scan played (global search %d, certified %d), worst accepted match %.3f m; "
       "drive replayed in %.1f s wall\n",
-      stale_m, st.size(), accepted,
+      stale_m, st.size(), accepted.count,
       first_accepted ? first_accepted->header.stamp.toSec() - st.front().header.stamp.toSec() : NAN,
       first_accepted ? static_cast<int>(first_accepted->global_search) : -1,
-      first_accepted ? static_cast<int>(first_accepted->certified) : -1, worst_match_m,
+      first_accepted ? static_cast<int>(first_accepted->certified) : -1, accepted.worst_m,
       (ros::WallTime::now() - drive_start).toSec());
   ASSERT_NE(first_accepted, nullptr) << "never relocalized";
   EXPECT_TRUE(first_accepted->global_search) << "the first accepted match was not a global search";
   EXPECT_TRUE(last_accepted->certified) << last_accepted->certificate_failure;
 
   // The EKF: never far from the truth with a small covariance; ends localized.
-  double worst_ratio = 0.0;
-  for (const nav_msgs::Odometry& o : od) {
-    const PoseError e = poseError(truth, o.header.stamp.toSec(), toPose(o.pose.pose));
-    if (!e.valid()) continue;
-    const double sigma = std::sqrt(o.pose.covariance[0] + o.pose.covariance[7]);
-    const double bound = std::max(kTolXyM, 3.0 * sigma);
-    worst_ratio = std::max(worst_ratio, e.xy_m / bound);
-    EXPECT_LE(e.xy_m, bound) << "EKF estimate " << e.xy_m << " m off with sigma " << sigma
-                             << " m at " << o.header.stamp.toSec();
-  }
+  const double worst_ratio = expectEkfWithinItsSigma(drive.odometry, truth, kTolXyM);
   std::printf("[vehicle_stale_start] EKF: %zu estimates, worst error / max(0.3 m, 3 sigma) %.2f\n",
-              od.size(), worst_ratio);
+              drive.odometry.size(), worst_ratio);
   expectEndsLocalized(outputs, truth, "vehicle_stale_start", kTolXyM, kTolYawRad);
   expectNothingNonFinite(outputs);
 }

@@ -313,6 +313,76 @@ inline void expectEndsLocalized(Outputs& outputs, const Truth& truth, const char
   EXPECT_LE(e.yaw_rad, tol_yaw_rad);
 }
 
+/// What the stack published over a played drive, and the truth.
+struct DriveRecord {
+  std::vector<MatchStatus> statuses;
+  std::vector<nav_msgs::Odometry> odometry;
+  Truth truth;
+};
+
+/// Waits (wall, up to timeout_s) until the ground truth played reaches end_stamp, then 3 s for
+/// the last scans' statuses, and copies what was published; false when the bag never ended.
+inline bool recordDrive(Outputs& outputs, double end_stamp, double timeout_s, DriveRecord* out) {
+  const bool ended = waitFor(
+      [&] {
+        return outputs.locked(
+            [&] { return !outputs.truth_.empty() && outputs.truth_.last() >= end_stamp - 0.02; });
+      },
+      timeout_s);
+  if (!ended) return false;
+  ros::WallDuration(3.0).sleep();
+  outputs.locked([&] {
+    out->statuses = outputs.statuses_;
+    out->odometry = outputs.odometry_;
+    out->truth = outputs.truth_;
+    return 0;
+  });
+  return true;
+}
+
+/// The accepted matches of a drive: how many, the first and last, the worst error [m].
+struct AcceptedMatches {
+  size_t count = 0;
+  const MatchStatus* first = nullptr;
+  const MatchStatus* last = nullptr;
+  double worst_m = 0.0;
+};
+
+/// Every accepted match within tol_xy_m of the truth (a failure names each one that is not).
+inline AcceptedMatches expectAcceptedWithin(const std::vector<MatchStatus>& statuses,
+                                            const Truth& truth, double tol_xy_m) {
+  AcceptedMatches a;
+  for (const MatchStatus& s : statuses) {
+    if (!s.accepted) continue;
+    ++a.count;
+    if (a.first == nullptr) a.first = &s;
+    a.last = &s;
+    const PoseError e = poseError(truth, s.header.stamp.toSec(), toPose(s.pose.pose));
+    if (!e.valid()) continue;
+    a.worst_m = std::max(a.worst_m, e.xy_m);
+    EXPECT_LE(e.xy_m, tol_xy_m) << "a match " << e.xy_m << " m off was accepted (prior "
+                                << s.prior_source << ", window " << s.window_half_x_m << " m)";
+  }
+  return a;
+}
+
+/// No EKF estimate farther from the truth than max(tol_xy_m, 3 sigma of its x-y covariance);
+/// returns the worst error / bound.
+inline double expectEkfWithinItsSigma(const std::vector<nav_msgs::Odometry>& odometry,
+                                      const Truth& truth, double tol_xy_m) {
+  double worst_ratio = 0.0;
+  for (const nav_msgs::Odometry& o : odometry) {
+    const PoseError e = poseError(truth, o.header.stamp.toSec(), toPose(o.pose.pose));
+    if (!e.valid()) continue;
+    const double sigma = std::sqrt(o.pose.covariance[0] + o.pose.covariance[7]);
+    const double bound = std::max(tol_xy_m, 3.0 * sigma);
+    worst_ratio = std::max(worst_ratio, e.xy_m / bound);
+    EXPECT_LE(e.xy_m, bound) << "EKF estimate " << e.xy_m << " m off with sigma " << sigma
+                             << " m at " << o.header.stamp.toSec();
+  }
+  return worst_ratio;
+}
+
 /// Nothing non-finite was published, and the EKF published at all.
 inline void expectNothingNonFinite(Outputs& outputs) {
   outputs.locked([&] {

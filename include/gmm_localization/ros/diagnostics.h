@@ -31,6 +31,23 @@ inline double wallNow() { return ros::WallTime::now().toSec(); }
 /// A problem this recent (wall seconds) keeps its WARN in a nodelet's status.
 constexpr double kRecentProblemS = 10.0;
 
+/// A nodelet's latest problem: kept for its diagnostic (a WARN while recent()) and logged as a
+/// ROS_WARN naming the nodelet at most every 5 s of wall time. Not thread-safe: the nodelet's
+/// mutex guards it.
+class ProblemLog {
+ public:
+  explicit ProblemLog(std::string nodelet_name) : name_(std::move(nodelet_name)) {}
+  void report(const std::string& what);
+  const std::string& last() const { return last_; }
+  /// A problem was reported within kRecentProblemS (wall).
+  bool recent() const { return wallNow() - time_s_ < kRecentProblemS; }
+
+ private:
+  std::string name_, last_;
+  double time_s_ = -1e9;  ///< wall time of last_ [s]
+  double log_s_ = -1e9;   ///< wall time of the last warning logged [s]
+};
+
 /// A number with `digits` decimals, for a status's values.
 inline std::string fixed(double v, int digits) {
   char buf[64];

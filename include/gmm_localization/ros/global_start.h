@@ -58,7 +58,6 @@ class GlobalStart {
   geometry_msgs::PoseWithCovarianceStamped windowPose(const Eigen::Vector2d& centre,
                                                       const ros::Time& stamp) const;
   void setUpDiagnostics();
-  void problem(const std::string& what);  ///< records it, ROS_WARN throttled
 
   ros::NodeHandle nh_, pnh_;
   std::string name_;
@@ -78,9 +77,7 @@ class GlobalStart {
   std::vector<ChunkId> window_chunks_;
   std::optional<geometry_msgs::PoseWithCovarianceStamped> sent_;  ///< our last /initialpose
   uint64_t statuses_ = 0;
-  std::string last_problem_;
-  double last_problem_time_s_ = -1e9;
-  double last_log_s_ = -1e9;
+  ProblemLog problems_;  ///< its latest problem (WARN throttled)
 };
 
 }  // namespace node

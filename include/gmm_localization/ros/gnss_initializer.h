@@ -62,7 +62,6 @@ class GnssInitializer {
   /// The antenna's lever arm in base_link from TF; false (with a problem) when it is missing.
   bool leverArm(const std::string& antenna_frame, Eigen::Vector3d& out);
   void setUpDiagnostics();
-  void problem(const std::string& what);  ///< records it, ROS_WARN throttled
 
   ros::NodeHandle nh_, pnh_;
   std::string name_;
@@ -88,9 +87,7 @@ class GnssInitializer {
   std::string last_sent_;
   double last_fix_wall_s_ = -1.0;
   double start_wall_s_ = 0.0;
-  std::string last_problem_;
-  double last_problem_time_s_ = -1e9;
-  double last_log_s_ = -1e9;
+  ProblemLog problems_;  ///< its latest problem (WARN throttled)
 };
 
 }  // namespace node

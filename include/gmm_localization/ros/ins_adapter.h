@@ -46,7 +46,6 @@ class InsAdapter {
  private:
   void onOdometry(const nav_msgs::Odometry::ConstPtr& msg);
   void setUpDiagnostics();
-  void problem(const std::string& what);  ///< records it, ROS_WARN throttled
 
   ros::NodeHandle nh_, pnh_;
   std::string name_;
@@ -63,9 +62,7 @@ class InsAdapter {
   uint64_t received_ = 0, published_ = 0, no_tf_ = 0, invalid_ = 0, out_of_order_ = 0;
   uint64_t restarts_ = 0, gaps_ = 0;
   std::string last_child_frame_;
-  std::string last_problem_;
-  double last_problem_time_s_ = -1e9;  ///< wall time of last_problem_ [s]
-  double last_log_s_ = -1e9;           ///< wall time of the last warning logged [s]
+  ProblemLog problems_;  ///< its latest problem (WARN throttled)
 };
 
 }  // namespace node

@@ -55,10 +55,11 @@ TEST(SweepWindowCentres, EveryPointOfEveryTileIsInsideAWindowByHalfTheOverlap) {
     std::uniform_real_distribution<double> u(0.0, 1.0);
     for (const auto& t : tiles) {
       // the corners and random points
-      std::vector<Eigen::Vector2d> points = {t.min(), t.max(), {t.min().x(), t.max().y()},
-                                             {t.max().x(), t.min().y()}};
+      std::vector<Eigen::Vector2d> points = {
+          t.min(), t.max(), {t.min().x(), t.max().y()}, {t.max().x(), t.min().y()}};
       for (int i = 0; i < 20; ++i) {
-        points.push_back(t.min() + (t.max() - t.min()).cwiseProduct(Eigen::Vector2d(u(rng), u(rng))));
+        points.push_back(t.min() +
+                         (t.max() - t.min()).cwiseProduct(Eigen::Vector2d(u(rng), u(rng))));
       }
       for (const auto& p : points) {
         ASSERT_LE(bestChebyshev(centres, p), h - m + 1e-9)
@@ -179,11 +180,12 @@ StartSweep sweepOf(int windows, StartSweepOptions o = {}) {
 }
 
 TEST(StartSweep, WaitsForAnswersWithoutAPriorThenLoadsAndSearchesTheFirstWindow) {
-  StartSweep s = sweepOf(3);  // wait 5 s, map wait 10 s
+  StartSweep s = sweepOf(3);                        // wait 5 s, map wait 10 s
   EXPECT_EQ(s.poll(0.0, false).kind, Kind::kNone);  // no answer yet: the matcher may be down
   s.onStatus(1.0, answer(false, true, false));
   EXPECT_EQ(s.poll(5.9, false).kind, Kind::kNone);
-  s.onStatus(3.0, answer(false, false, false));  // a prior came (a configured pose): the wait restarts
+  s.onStatus(3.0,
+             answer(false, false, false));  // a prior came (a configured pose): the wait restarts
   s.onStatus(4.0, answer(false, true, false));
   EXPECT_EQ(s.poll(8.9, false).kind, Kind::kNone);
   const auto load = s.poll(9.0, false);

@@ -25,9 +25,9 @@
 //              sigma of pi (the matcher's global window); the first global search centred
 //              within window_half_xy_m / 4 of it (not one of the matcher's own around an
 //              earlier window, which may still be running) that is not accepted, or
-//              attempt_timeout_s without one, moves on to the next window; after the last window the sweep starts over (the vehicle moves, and
-//              a search stopped at its node budget may have missed it), up to max_sweeps
-//              passes (0: no limit), then gave_up;
+//              attempt_timeout_s without one, moves on to the next window; after the last window
+//              the sweep starts over (the vehicle moves, and a search stopped at its node budget
+//              may have missed it), up to max_sweeps passes (0: no limit), then gave_up;
 //   localized  any accepted match (global or not) ends the work: the node stays idle, a later
 //              loss is the matcher's (it widens its own global windows while lost);
 //   stood_down a pose from anyone else on /initialpose (rviz, the GNSS initializer) before the
@@ -48,10 +48,10 @@
 namespace gmm_localization {
 
 struct StartSweepOptions {
-  double window_half_xy_m = 50.0;  ///< h: half extent of a window (matcher global_max_half_xy_m)
-  double overlap_m = 10.0;         ///< neighbouring windows overlap by at least this [m]
-  double wait_s = 5.0;             ///< matcher without a prior this long before the sweep starts
-  double map_wait_s = 10.0;        ///< longest wait for a window's chunks before its search
+  double window_half_xy_m = 50.0;   ///< h: half extent of a window (matcher global_max_half_xy_m)
+  double overlap_m = 10.0;          ///< neighbouring windows overlap by at least this [m]
+  double wait_s = 5.0;              ///< matcher without a prior this long before the sweep starts
+  double map_wait_s = 10.0;         ///< longest wait for a window's chunks before its search
   double attempt_timeout_s = 30.0;  ///< no answer from the window's search this long: next one
   int max_sweeps = 3;               ///< passes over the windows before giving up (0: no limit)
   /// A rough fix: only windows within region_radius_m of (region_x_m, region_y_m) are swept,
@@ -85,7 +85,7 @@ class StartSweep {
   struct Action {
     enum class Kind { kNone, kLoadMap, kSearch } kind = Kind::kNone;
     Eigen::Vector2d centre = Eigen::Vector2d::Zero();  ///< the window's centre [m]
-    int window = -1;                                    ///< its index in windows()
+    int window = -1;                                   ///< its index in windows()
   };
 
   explicit StartSweep(StartSweepOptions options);
@@ -97,8 +97,8 @@ class StartSweep {
   /// The matcher's answer to a scan.
   struct Answer {
     bool accepted = false;
-    bool no_prior = false;       ///< its prior mode was "no_prior"
-    bool global_search = false;  ///< the window was global
+    bool no_prior = false;                                    ///< its prior mode was "no_prior"
+    bool global_search = false;                               ///< the window was global
     Eigen::Vector2d window_centre = Eigen::Vector2d::Zero();  ///< [m]
   };
   /// now_s: when the answer came.
@@ -110,11 +110,11 @@ class StartSweep {
 
   State state() const { return state_; }
   const StartSweepOptions& options() const { return options_; }
-  int window() const { return index_; }     ///< current window (-1 before the first)
-  int sweeps() const { return sweeps_; }    ///< completed passes
-  uint64_t searched() const { return searched_; }       ///< windows sent
-  uint64_t searchedEarly() const { return early_; }     ///< ... before all their chunks came
-  uint64_t timedOut() const { return timed_out_; }      ///< ... without an answer in time
+  int window() const { return index_; }              ///< current window (-1 before the first)
+  int sweeps() const { return sweeps_; }             ///< completed passes
+  uint64_t searched() const { return searched_; }    ///< windows sent
+  uint64_t searchedEarly() const { return early_; }  ///< ... before all their chunks came
+  uint64_t timedOut() const { return timed_out_; }   ///< ... without an answer in time
 
  private:
   Action load(double now_s);
