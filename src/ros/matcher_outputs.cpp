@@ -68,10 +68,10 @@ void toStatusMsg(const MatchReport& r, const std::string& map_frame, double late
   msg.protection_xy_m = r.has_result ? safe(r.result.protection_xy_m) : 0.0;
   msg.protection_heading_rad = r.has_result ? safe(r.result.protection_heading_rad) : 0.0;
   msg.certificate_evaluations = r.has_result ? static_cast<uint64_t>(cert.evaluations) : 0;
-  // A lost prior's window is the global search's: searched (not skipped) even when the search
-  // stopped at its budget or found the window off the map, which leaves no result.
+  // A window searched over heading intervals is the global search's, also when the search
+  // stopped at its budget or was cancelled, which leaves no result.
   const bool global_result = r.has_result && r.result.global;
-  msg.global_search = global_result || (r.prior.lost && r.outcome != MatchOutcome::kSkipped);
+  msg.global_search = global_result || (r.global_window && r.outcome != MatchOutcome::kSkipped);
   msg.global_certified = global_result && r.result.global_certificate.certified;
   msg.global_separation_per_point =
       global_result ? safe(r.result.global_certificate.separation_per_point) : 0.0;

@@ -112,7 +112,7 @@ TEST(MatcherOutputs, AGlobalWindowIsReportedAsSuchWithOrWithoutAResult) {
   r.outcome = MatchOutcome::kRejected;
   r.reason = "search stopped at its budget";
   r.has_result = false;
-  r.prior.lost = true;
+  r.global_window = true;
   r.prior.pose.y = -4.0;
   r.window = {50.0, 50.0, M_PI};
   MatchStatus s;

@@ -150,6 +150,20 @@ TEST_F(RegistrationErrorTest, MatchProcessorSkipsOnNoPointsAndRejectsOtherFailur
   const MatchReport rejected = processor->process(*chunks_, scan, far, nullptr, false);
   EXPECT_EQ(rejected.outcome, MatchOutcome::kRejected) << rejected.reason;
   EXPECT_EQ(rejected.reason.rfind("off the map", 0), 0u) << rejected.reason;
+  EXPECT_FALSE(rejected.global_window);
+
+  // A global window (the full turn) whose search is cancelled: rejected, and still reported as
+  // a global window (the status's global_search) although it left no result.
+  Prior lost = prior;
+  lost.wide = lost.lost = true;
+  lost.wide_window = WindowExtent{5.0, 5.0, M_PI};
+  std::atomic<bool> cancel{true};
+  const MatchReport cancelled =
+      processor->process(*chunks_, scan, lost, nullptr, false, nullptr, nullptr, &cancel);
+  EXPECT_EQ(cancelled.outcome, MatchOutcome::kRejected) << cancelled.reason;
+  EXPECT_EQ(cancelled.reason.rfind("global search cancelled", 0), 0u) << cancelled.reason;
+  EXPECT_TRUE(cancelled.global_window);
+  EXPECT_FALSE(cancelled.has_result);
 }
 
 }  // namespace

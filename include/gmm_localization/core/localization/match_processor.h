@@ -60,6 +60,9 @@ struct MatchReport {
   PriorMode mode_after = PriorMode::kNoPrior;
   WindowExtent window;         ///< requested half extents
   SearchWindow search_window;  ///< discretised (cells, heading steps), valid when searched
+  /// The window is searched over heading intervals (the global search: at least the
+  /// registration's interval_search_min_headings headings), whatever the outcome.
+  bool global_window = false;
   bool deskewed = false;
   std::string time_source;  ///< ScanInput::time_source
   /// Why the scan was not deskewed (no or refused per-point times, no twist, skipped before);
