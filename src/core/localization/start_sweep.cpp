@@ -26,11 +26,6 @@ Eigen::AlignedBox2d square(const Eigen::Vector2d& centre, double half) {
   return {centre - Eigen::Vector2d::Constant(half), centre + Eigen::Vector2d::Constant(half)};
 }
 
-/// Distance from p to the box (0 inside).
-double distanceTo(const Eigen::AlignedBox2d& box, const Eigen::Vector2d& p) {
-  return (p.cwiseMax(box.min()).cwiseMin(box.max()) - p).norm();
-}
-
 }  // namespace
 
 std::string StartSweepOptions::validate() const {
@@ -71,7 +66,7 @@ std::vector<Eigen::Vector2d> sweepWindowCentres(const std::vector<Eigen::Aligned
   std::vector<Eigen::AlignedBox2d> kept;
   for (const auto& t : tiles) {
     if (t.isEmpty()) continue;
-    if (o.hasRegion() && distanceTo(t, fix) > o.region_radius_m) continue;
+    if (o.hasRegion() && t.exteriorDistance(fix) > o.region_radius_m) continue;
     kept.push_back(t);
   }
   if (kept.empty()) return {};
@@ -182,11 +177,11 @@ void StartSweep::onExternalPose() {
   }
 }
 
-StartSweep::Action StartSweep::load(double now_s) {
-  state_ = State::kLoading;
+StartSweep::Action StartSweep::enter(State state, Action::Kind kind, double now_s) {
+  state_ = state;
   phase_since_s_ = now_s;
   Action a;
-  a.kind = Action::Kind::kLoadMap;
+  a.kind = kind;
   a.window = index_;
   a.centre = windows_[index_];
   return a;
@@ -200,19 +195,13 @@ StartSweep::Action StartSweep::poll(double now_s, bool map_loaded) {
         return {};
       }
       index_ = 0;
-      return load(now_s);
+      return enter(State::kLoading, Action::Kind::kLoadMap, now_s);
     case State::kLoading: {
       if (!map_loaded && now_s - phase_since_s_ < options_.map_wait_s) return {};
       if (!map_loaded) ++early_;
       ++searched_;
-      state_ = State::kSearching;
-      phase_since_s_ = now_s;
       answered_ = false;
-      Action a;
-      a.kind = Action::Kind::kSearch;
-      a.window = index_;
-      a.centre = windows_[index_];
-      return a;
+      return enter(State::kSearching, Action::Kind::kSearch, now_s);
     }
     case State::kSearching: {
       const bool timed_out = now_s - phase_since_s_ >= options_.attempt_timeout_s;
@@ -226,7 +215,7 @@ StartSweep::Action StartSweep::poll(double now_s, bool map_loaded) {
           return {};
         }
       }
-      return load(now_s);
+      return enter(State::kLoading, Action::Kind::kLoadMap, now_s);
     }
     default:
       return {};

@@ -117,7 +117,8 @@ class StartSweep {
   uint64_t timedOut() const { return timed_out_; }   ///< ... without an answer in time
 
  private:
-  Action load(double now_s);
+  /// Enters `state` (loading or searching) for the current window: the caller's action.
+  Action enter(State state, Action::Kind kind, double now_s);
 
   StartSweepOptions options_;
   std::vector<Eigen::Vector2d> windows_;
