@@ -167,9 +167,8 @@ MatchReport MatchProcessor::process(const ChunkMap& map, ScanInput scan, const P
   const Registration& registration =
       reflectivity ? reflectivity_ : (prior.z_known ? tracking_ : unknown_z_);
   std::vector<TraversalNode>* traversal = want_traversal ? &r.traversal : nullptr;
-  r.global_window =
-      discreteWindow(request, registration.options().heading_step_rad, map.geometry().resolution_m)
-          .sizeH() >= registration.options().interval_search_min_headings;
+  r.global_window = registration.searchesGlobally(discreteWindow(
+      request, registration.options().heading_step_rad, map.geometry().resolution_m));
   auto match = registration.match(map, reflectivity ? reflectivity_points : scan.points, request,
                                   traversal, now, &r.timing);
   // A global window larger than the map the server holds is searched over the loaded part

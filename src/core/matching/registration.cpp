@@ -144,7 +144,7 @@ RegistrationResult<PreparedSearch> Registration::prepare(const ChunkMap& map,
     }
     second = {request.fused->map, &ground.points};
   }
-  if (window.sizeH() >= options_.interval_search_min_headings && options_.global.max_points > 0) {
+  if (searchesGlobally(window) && options_.global.max_points > 0) {
     f.points = thinEvenly(f.points, options_.global.max_points);
     ground.points = thinEvenly(ground.points, options_.global.max_points);
   }
@@ -197,7 +197,7 @@ SearchOutcome Registration::search(const SearchProblem& problem,
   if (cancelled != nullptr) *cancelled = false;
   // Algorithm 2 (reference) or 3 over x, y, heading; wide heading ranges over intervals.
   if (options_.exhaustive) return exhaustiveSearch(problem);
-  if (problem.window().sizeH() >= options_.interval_search_min_headings) {
+  if (searchesGlobally(problem.window())) {
     GlobalSearchOutcome g =
         globalBranchAndBound(problem, options_.global, global_pool_.get(), cancel);
     if (complete != nullptr) *complete = g.complete;
@@ -211,7 +211,7 @@ RegistrationResult<MatchResult> Registration::finish(
     const ChunkMap& map, const PointList& base_points, const MatchRequest& request,
     PreparedSearch prepared, const SearchOutcome& search, const std::function<double()>& now,
     RegistrationTiming* timing) const {
-  if (prepared.problem.window().sizeH() >= options_.interval_search_min_headings) {
+  if (searchesGlobally(prepared.problem.window())) {
     return finishGlobal(map, base_points, request, std::move(prepared), search, now, timing);
   }
   return finishLocal(map, base_points, request, std::move(prepared), search, now, timing);

@@ -185,6 +185,12 @@ class Registration {
                                         const std::function<double()>& now = nullptr,
                                         RegistrationTiming* timing = nullptr) const;
 
+  /// A window of this many headings or more is searched over heading intervals (the global
+  /// search, finished by finishGlobal()).
+  bool searchesGlobally(const SearchWindow& window) const {
+    return window.sizeH() >= options_.interval_search_min_headings;
+  }
+
   /// The stages of match(), for tools that time or compare them (the benchmark runs both
   /// searches on one prepared problem). Same failures as match().
   RegistrationResult<PreparedSearch> prepare(const ChunkMap& map, const PointList& base_points,
