@@ -145,7 +145,8 @@ bool MixtureLogTerms::logTerms(double z_m, double* t, double* peak) const {
 
 double MixtureLogTerms::logSumExp(const double* t, double peak) const {
   double sum = 0.0;
-  for (int j = 0; j < count; ++j) sum += std::exp(t[j] - peak);
+  // The peak's own term is exp(0) = 1 exactly: added without calling exp, the same sum.
+  for (int j = 0; j < count; ++j) sum += t[j] == peak ? 1.0 : std::exp(t[j] - peak);
   return peak + std::log(sum);
 }
 

@@ -110,12 +110,14 @@ double ExactScorer::kernel(double d) const {
   return kernel_table_[i] + a * (kernel_table_[i + 1] - kernel_table_[i]);
 }
 
-template <typename PointValue>
-double ExactScorer::blockSums(size_t points, TaskPool* pool, const PointValue& value) const {
+template <typename PointValue, typename BlockStart>
+double ExactScorer::blockSums(size_t points, TaskPool* pool, const PointValue& value,
+                              const BlockStart& block_start) const {
   const size_t blocks = (points + kBlockPoints - 1) / kBlockPoints;
   auto block_sum = [&](size_t b) {
     double sum = 0.0;
     const size_t end = std::min(points, (b + 1) * kBlockPoints);
+    block_start(b * kBlockPoints, end);
     for (size_t i = b * kBlockPoints; i < end; ++i) sum += value(i);
     return sum;
   };
@@ -135,8 +137,10 @@ double ExactScorer::blockSums(size_t points, TaskPool* pool, const PointValue& v
 
 double ExactScorer::score(const PointList& base_points, const Pose6& pose, TaskPool* pool) const {
   const Eigen::Isometry3d T = toIsometry(pose);
-  return blockSums(base_points.size(), pool,
-                   [&](size_t i) { return pointLogLikelihood(T * base_points[i].cast<double>()); });
+  return blockSums(
+      base_points.size(), pool,
+      [&](size_t i) { return pointLogLikelihood(T * base_points[i].cast<double>()); },
+      [](size_t, size_t) {});
 }
 
 double ExactScorer::scoreReusing(const PointList& base_points, const Pose6& pose,
@@ -150,22 +154,61 @@ double ExactScorer::scoreReusing(const PointList& base_points, const Pose6& pose
   const bool can_reuse = reuse != nullptr && reuse->size() == base_points.size();
   out->resize(base_points.size());
   const MapGeometry& g = map_.geometry();
-  return blockSums(base_points.size(), pool, [&](size_t i) {
-    const Eigen::Vector3d q = R_tilt * base_points[i].cast<double>();
-    const double z = q.z() + pose.z;
-    const CellOffset o =
-        cellOffset(g, c * q.x() - s * q.y() + pose.x, s * q.x() + c * q.y() + pose.y);
-    CellBlockMemo& m = (*out)[i];
-    if (can_reuse && (*reuse)[i].cx == o.cx && (*reuse)[i].cy == o.cy && (*reuse)[i].z == z) {
-      m = (*reuse)[i];
-    } else {
-      m.cx = o.cx;
-      m.cy = o.cy;
-      m.z = z;
-      blockLogLikelihoods(o.cx, o.cy, z, m.ll);
+  // Each block of points in two passes: first every point's cell block and height, then the
+  // values, summed in point order as score() does. The second pass requests the cells of the
+  // point kAhead places on before it evaluates one: a point's nine cells are three rows of a
+  // chunk far from the previous point's, and read one by one each would wait for memory.
+  constexpr size_t kAhead = 8;
+  std::vector<Eigen::Vector2d> offset(base_points.size());
+  std::vector<uint8_t> evaluate(base_points.size());
+  std::vector<size_t> block_end(base_points.size());
+  auto ask = [&](size_t i) {
+    if (evaluate[i]) prefetchBlock((*out)[i].cx, (*out)[i].cy);
+  };
+  auto place = [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) {
+      const Eigen::Vector3d q = R_tilt * base_points[i].cast<double>();
+      const double z = q.z() + pose.z;
+      const CellOffset o =
+          cellOffset(g, c * q.x() - s * q.y() + pose.x, s * q.x() + c * q.y() + pose.y);
+      offset[i] = {o.fx, o.fy};
+      block_end[i] = end;
+      CellBlockMemo& m = (*out)[i];
+      if (can_reuse && (*reuse)[i].cx == o.cx && (*reuse)[i].cy == o.cy && (*reuse)[i].z == z) {
+        m = (*reuse)[i];
+        evaluate[i] = 0;
+      } else {
+        m.cx = o.cx;
+        m.cy = o.cy;
+        m.z = z;
+        evaluate[i] = 1;
+      }
     }
-    return weightedMean(o.fx, o.fy, m.ll);
-  });
+    for (size_t i = begin; i < std::min(end, begin + kAhead); ++i) ask(i);
+  };
+  return blockSums(
+      base_points.size(), pool,
+      [&](size_t i) {
+        if (i + kAhead < block_end[i]) ask(i + kAhead);
+        CellBlockMemo& m = (*out)[i];
+        if (evaluate[i]) blockLogLikelihoods(m.cx, m.cy, m.z, m.ll);
+        return weightedMean(offset[i].x(), offset[i].y(), m.ll);
+      },
+      place);
+}
+
+void ExactScorer::prefetchBlock(int64_t cx, int64_t cy) const {
+  const MapChunk* chunk = window_.chunk(cx, cy);
+  if (chunk == nullptr || !chunk->hasMixtures()) return;
+  const int64_t mask = chunk->cells() - 1;
+  const int64_t lx = cx & mask, ly = cy & mask;
+  if (lx < 1 || ly < 1 || lx + 1 > mask || ly + 1 > mask) return;
+  for (int ky = -1; ky <= 1; ++ky) {
+    const MixtureLogTerms* row =
+        &chunk->logTerms(static_cast<int>(lx - 1), static_cast<int>(ly + ky));
+    __builtin_prefetch(row);
+    __builtin_prefetch(reinterpret_cast<const char*>(row + 3) - 1);
+  }
 }
 
 }  // namespace gmm_localization

@@ -26,12 +26,19 @@ class VoxelAccumulator {
     sums_.reserve(expected_voxels);
   }
 
-  void add(const Eigen::Vector3f& p) {
+  /// The voxel key of p.
+  uint64_t key(const Eigen::Vector3f& p) const {
     const int64_t fx = floorToInt(p.x() * inv_), fy = floorToInt(p.y() * inv_),
                   fz = floorToInt(p.z() * inv_);
-    const uint64_t key = ((static_cast<uint64_t>(fx + kOffset) & kMask) << 42) |
-                         ((static_cast<uint64_t>(fy + kOffset) & kMask) << 21) |
-                         (static_cast<uint64_t>(fz + kOffset) & kMask);
+    return ((static_cast<uint64_t>(fx + kOffset) & kMask) << 42) |
+           ((static_cast<uint64_t>(fy + kOffset) & kMask) << 21) |
+           (static_cast<uint64_t>(fz + kOffset) & kMask);
+  }
+  /// Asks the memory for the table slot of `key` (add() with it soon after finds it cached).
+  void prefetch(uint64_t key) const { index_.prefetch(key); }
+  void add(const Eigen::Vector3f& p) { add(p, key(p)); }
+  /// Adds p, whose key() is `key`.
+  void add(const Eigen::Vector3f& p, uint64_t key) {
     if (key != last_key_) {
       bool inserted = false;
       last_ = index_.insert(key, inserted);
@@ -103,28 +110,48 @@ FilteredScan filterScan(const PointList& base_points, double roll_rad, double pi
   // One pass: level, filter, and (with voxel_m > 0) accumulate voxels without a copy of the
   // kept points.
   const bool voxelize = options.voxel_m > 0.0;
-  VoxelAccumulator voxels(voxelize ? options.voxel_m : 1.0, voxelize ? base_points.size() / 8 : 0);
+  // About one voxel in four points at 0.2 m on a four-sensor revolution: the table is not grown.
+  VoxelAccumulator voxels(voxelize ? options.voxel_m : 1.0, voxelize ? base_points.size() / 4 : 0);
   PointList kept;
   if (!voxelize) kept.reserve(base_points.size());
-  for (const Eigen::Vector3f& p : base_points) {
-    if (!p.allFinite()) {
-      ++out.dropped_nonfinite;
-      continue;
+  // In batches: first each point's levelled position and voxel key, the key's table slot
+  // requested ahead (the voxels of consecutive points are scattered over a table larger than
+  // the caches), then the voxels in point order (the same centroids, in the same order).
+  constexpr size_t kBatch = 32;
+  Eigen::Vector3f level_q[kBatch];
+  uint64_t keys[kBatch];
+  for (size_t first = 0; first < base_points.size(); first += kBatch) {
+    const size_t count = std::min(kBatch, base_points.size() - first);
+    size_t passed = 0;
+    for (size_t k = 0; k < count; ++k) {
+      const Eigen::Vector3f& p = base_points[first + k];
+      if (!p.allFinite()) {
+        ++out.dropped_nonfinite;
+        continue;
+      }
+      const Eigen::Vector3f q = level * p;
+      const float r2 = q.x() * q.x() + q.y() * q.y();
+      if (r2 < r_min2 || r2 > r_max2) {
+        ++out.dropped_range;
+        continue;
+      }
+      if (q.z() < options.min_height_m || q.z() > options.max_height_m) {
+        ++out.dropped_height;
+        continue;
+      }
+      level_q[passed] = q;
+      if (voxelize) {
+        keys[passed] = voxels.key(q);
+        voxels.prefetch(keys[passed]);
+      }
+      ++passed;
     }
-    const Eigen::Vector3f q = level * p;
-    const float r2 = q.x() * q.x() + q.y() * q.y();
-    if (r2 < r_min2 || r2 > r_max2) {
-      ++out.dropped_range;
-      continue;
-    }
-    if (q.z() < options.min_height_m || q.z() > options.max_height_m) {
-      ++out.dropped_height;
-      continue;
-    }
-    if (voxelize) {
-      voxels.add(q);
-    } else {
-      kept.push_back(q);
+    for (size_t k = 0; k < passed; ++k) {
+      if (voxelize) {
+        voxels.add(level_q[k], keys[k]);
+      } else {
+        kept.push_back(level_q[k]);
+      }
     }
   }
   out.voxels = voxelize ? voxels.centroids() : std::move(kept);

@@ -41,6 +41,8 @@ class KeyIndex {
     }
   }
   size_t size() const { return size_; }
+  /// Asks the memory for the slot where a lookup of `key` starts.
+  void prefetch(uint64_t key) const { __builtin_prefetch(&slots_[slot(key | kTag)]); }
 
  private:
   struct Slot {

@@ -59,9 +59,14 @@ class ExactScorer {
   void blockLogLikelihoods(int64_t cx, int64_t cy, double z, double ll[9]) const;
   /// Their Gaussian-weighted mean for a point (fx, fy) cells from the centre cell's centre.
   double weightedMean(double fx, double fy, const double ll[9]) const;
-  /// Block sums of per-point values (see score()).
-  template <typename PointValue>
-  double blockSums(size_t points, TaskPool* pool, const PointValue& value) const;
+  /// Block sums of per-point values (see score()); block_start(begin, end) runs first in each
+  /// block, on the thread that then sums it.
+  template <typename PointValue, typename BlockStart>
+  double blockSums(size_t points, TaskPool* pool, const PointValue& value,
+                   const BlockStart& block_start) const;
+  /// Asks the memory for the 3 x 3 block of cells around cell (cx, cy) (nothing when the block
+  /// crosses a chunk's edge).
+  void prefetchBlock(int64_t cx, int64_t cy) const;
   double kernel(double d_cells) const;
   static constexpr int kKernelTableSize = 1538;        // covers [0, 1.5] cells and one guard entry
   static constexpr double kKernelTableScale = 1024.0;  // entries per cell
