@@ -41,10 +41,13 @@ struct QueueProof {
   bool pending = false;  ///< stopped at the budget with nodes that still matter
 };
 
-/// State the queues share: the node count (for the budget) and the stop on ambiguity.
+/// State the queues share: the node count (for the budget), the stop on ambiguity or on the
+/// caller's cancel flag, and whether the cancel flag stopped it.
 struct SharedProof {
   std::atomic<int64_t> evaluations{0};
   std::atomic<bool> stop{false};
+  std::atomic<bool> cancelled{false};
+  const std::atomic<bool>* cancel = nullptr;  ///< the caller's flag (may be null)
 };
 
 /// Best-first proof over the roots r with r % queues == q: every node whose bound reaches
@@ -77,6 +80,11 @@ QueueProof proveQueue(const SearchProblem& problem, const GlobalSearchOptions& s
       });
   search_detail::IntervalCounts counts;
   while (!queue.empty() && !shared.stop.load(std::memory_order_relaxed)) {
+    if (shared.cancel != nullptr && shared.cancel->load(std::memory_order_relaxed)) {
+      shared.cancelled = true;
+      shared.stop = true;
+      break;
+    }
     const IntervalNode n = queue.top();
     queue.pop();
     const IntervalGeometry::Extent e = geometry.of(n);
@@ -104,8 +112,10 @@ QueueProof proveQueue(const SearchProblem& problem, const GlobalSearchOptions& s
 
 MatchCertificate certifyGlobalOptimum(const SearchProblem& problem, const SearchOutcome& optimum,
                                       const CertificateOptions& o,
-                                      const GlobalSearchOptions& search, TaskPool* pool) {
+                                      const GlobalSearchOptions& search, TaskPool* pool,
+                                      const std::atomic<bool>* cancel, bool* cancelled) {
   MatchCertificate out;
+  if (cancelled != nullptr) *cancelled = false;
   if (!o.enabled) return out;
   const ScoreQuantizer q(problem.map().options());
   const double per_point_to_units = static_cast<double>(problem.scanPoints()) / q.step();
@@ -119,6 +129,7 @@ MatchCertificate certifyGlobalOptimum(const SearchProblem& problem, const Search
   const double typical_range = search_detail::typicalRangeCells(problem, search);
   const int queues = search.queues > 0 ? search.queues : (pool != nullptr ? pool->threads() : 1);
   SharedProof shared;
+  shared.cancel = cancel;
   std::vector<QueueProof> proofs(static_cast<size_t>(queues));
   parallelFor(pool, queues, [&](int k) {
     proofs[static_cast<size_t>(k)] =
@@ -134,10 +145,13 @@ MatchCertificate certifyGlobalOptimum(const SearchProblem& problem, const Search
     pending = pending || p.pending;
   }
   out.evaluations = shared.evaluations.load();
-  out.failure = ambiguous ? CertificateFailure::kAmbiguous
-                : pending ? CertificateFailure::kBudget
-                : border  ? CertificateFailure::kWindowEdge
-                          : CertificateFailure::kNone;
+  if (cancelled != nullptr) *cancelled = shared.cancelled;
+  // Cancelled: unproved, as a proof stopped at its budget.
+  out.failure = ambiguous && !shared.cancelled ? CertificateFailure::kAmbiguous
+                : shared.cancelled             ? CertificateFailure::kBudget
+                : pending                      ? CertificateFailure::kBudget
+                : border                       ? CertificateFailure::kWindowEdge
+                                               : CertificateFailure::kNone;
   out.certified = out.failure == CertificateFailure::kNone;
   out.separation_exact = false;  // a lower bound: the margin (or 0 when ambiguous)
   out.separation_per_point = ambiguous ? 0.0

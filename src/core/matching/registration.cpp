@@ -226,8 +226,16 @@ RegistrationResult<MatchResult> Registration::finishGlobal(
   const double t0 = tick();
   MatchCertificate global_certificate;
   if (options_.certificate.enabled) {
-    global_certificate = certifyGlobalOptimum(prepared.problem, search, options_.certificate,
-                                              options_.global, global_pool_.get());
+    bool cancelled = false;
+    global_certificate =
+        certifyGlobalOptimum(prepared.problem, search, options_.certificate, options_.global,
+                             global_pool_.get(), request.cancel, &cancelled);
+    if (cancelled) {
+      return R::failure(RegistrationError::kCancelled,
+                        "global certificate cancelled after " +
+                            std::to_string(global_certificate.evaluations) +
+                            " node scores: a newer pose replaced the one it searched around");
+    }
   }
   const double t1 = tick();
   // The confirming search: the tracking search around the global optimum, on all points.

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <random>
 
@@ -172,6 +173,37 @@ TEST(GlobalCertificate, ABudgetTooSmallNeverCertifiesWhatBruteForceRejects) {
     budget_failures += cert.failure == CertificateFailure::kBudget;
   }
   EXPECT_GE(budget_failures, 5);
+}
+
+TEST(GlobalCertificate, ACancelFlagStopsTheProofUncertifiedAndSaysSo) {
+  const ChunkMap chunks = testing::smallRandomChunks(67, 0.8);
+  std::mt19937 rng(71);
+  int cases = 0, shortened = 0;
+  for (int c = 0; c < 12; ++c) {
+    const SearchWindow w = testing::fullTurnWindow(rng, 10.0);
+    auto problem = SearchProblem::create(chunks, testing::randomPoints(rng, 100, 5.0), w);
+    if (!problem.ok()) continue;
+    ++cases;
+    const GlobalSearchOutcome g = globalBranchAndBound(problem.value());
+    const MatchCertificate full = certifyGlobalOptimum(problem.value(), g.best, {}, {});
+    std::atomic<bool> cancel{false};
+    bool cancelled = true;
+    const MatchCertificate unset =
+        certifyGlobalOptimum(problem.value(), g.best, {}, {}, nullptr, &cancel, &cancelled);
+    EXPECT_FALSE(cancelled);  // a flag never set changes nothing
+    EXPECT_EQ(unset.failure, full.failure) << "case " << c;
+    EXPECT_EQ(unset.evaluations, full.evaluations) << "case " << c;
+    cancel = true;
+    const MatchCertificate stopped =
+        certifyGlobalOptimum(problem.value(), g.best, {}, {}, nullptr, &cancel, &cancelled);
+    EXPECT_TRUE(cancelled) << "case " << c;
+    EXPECT_FALSE(stopped.certified) << "case " << c;
+    EXPECT_EQ(stopped.failure, CertificateFailure::kBudget) << "case " << c;
+    EXPECT_LE(stopped.evaluations, full.evaluations) << "case " << c;
+    shortened += stopped.evaluations < full.evaluations;
+  }
+  EXPECT_GE(cases, 8);
+  EXPECT_GE(shortened, cases / 2);  // only the roots were scored before the flag was seen
 }
 
 TEST(GlobalCertificate, DisabledReportsDisabled) {

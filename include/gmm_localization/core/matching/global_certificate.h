@@ -19,6 +19,8 @@
 // pose published after a global search is refined on all points (Registration), whose own
 // certificate covers the neighbourhood; the match is certified only when both are.
 
+#include <atomic>
+
 #include "gmm_localization/core/common/task_pool.h"
 #include "gmm_localization/core/matching/global_search.h"
 #include "gmm_localization/core/matching/match_certificate.h"
@@ -31,9 +33,12 @@ namespace gmm_localization {
 /// run in parallel on `pool`. The proof does not depend on the queues when it completes within
 /// the budget (every node reaching the floor that can change it is split, in any order); the
 /// evaluation count does. separation_per_point is a lower bound: the margin, or 0 when
-/// ambiguous.
+/// ambiguous. `cancel` (optional): checked before each node; once set, every queue stops, the
+/// certificate is not certified (failure kBudget: an unfinished proof) and `*cancelled` is set.
 MatchCertificate certifyGlobalOptimum(const SearchProblem& problem, const SearchOutcome& optimum,
                                       const CertificateOptions& options,
-                                      const GlobalSearchOptions& search, TaskPool* pool = nullptr);
+                                      const GlobalSearchOptions& search, TaskPool* pool = nullptr,
+                                      const std::atomic<bool>* cancel = nullptr,
+                                      bool* cancelled = nullptr);
 
 }  // namespace gmm_localization

@@ -71,8 +71,9 @@ struct MatchRequest {
   /// searched and refined together with the height points (null: the height points alone).
   /// Owned by the caller for the duration of the call.
   const FusedChannel* fused = nullptr;
-  /// A global (heading-interval) search stops when another thread sets this flag: the answer
-  /// is no longer wanted (kCancelled). Owned by the caller for the duration of the call.
+  /// A global (heading-interval) search, and the proof of its certificate after it, stop when
+  /// another thread sets this flag: the answer is no longer wanted (kCancelled). Owned by the
+  /// caller for the duration of the call.
   const std::atomic<bool>* cancel = nullptr;
 };
 
@@ -137,7 +138,7 @@ enum class RegistrationError {
   kLowCoverage,     ///< too little of the scan over mapped cells at the best pose
   kNumerical,       ///< non-finite pose or covariance
   kSearchBudget,    ///< the interval search reached GlobalSearchOptions::max_evaluations
-  kCancelled,       ///< the interval search was stopped by MatchRequest::cancel
+  kCancelled,       ///< the interval search or its certificate was stopped by MatchRequest::cancel
 };
 const char* registrationErrorName(RegistrationError kind);  ///< "no_points", "off_map", ...
 
