@@ -26,6 +26,14 @@ SearchOutcome makeOutcome(const SearchProblem& problem, int j, int tx, int ty, i
 
 }  // namespace search_detail
 
+const int64_t* SearchOutcome::childScores(int heading_index, int child_layer, int tx,
+                                          int ty) const {
+  const uint64_t key = branchKey(heading_index, child_layer, tx, ty);
+  const auto it = std::lower_bound(branched.begin(), branched.end(), key,
+                                   [](const Branched& b, uint64_t k) { return b.key < k; });
+  return it != branched.end() && it->key == key ? it->scores : nullptr;
+}
+
 namespace {
 
 using search_detail::keyLess;
@@ -70,10 +78,12 @@ struct Leaf {
   int j = 0, tx = 0, ty = 0;
 };
 
-/// Counts (and, when `traversal` is given, records) the nodes one pass scores.
+/// Counts (and, when `traversal` is given, records) the nodes one pass scores; `branched`
+/// receives the children's scores of each node the pass branched.
 struct NodeLog {
   SearchStats* stats;
   std::vector<TraversalNode>* traversal;
+  std::vector<SearchOutcome::Branched>* branched;
   void add(int j, int layer, int tx, int ty, int64_t s) {
     ++stats->evaluations;
     ++stats->evaluations_per_layer[layer];
@@ -124,7 +134,9 @@ Leaf bestFirst(const SearchProblem& problem, const std::vector<int64_t>& all_top
     // Branch into the (up to) four children at the next finer layer, scored in one pass.
     const int child = n.layer - 1;
     const int h = 1 << child;
-    int64_t scores[4];
+    SearchOutcome::Branched& b = log.branched->emplace_back();
+    b.key = SearchOutcome::branchKey(n.heading_index, child, n.tx, n.ty);
+    int64_t* scores = b.scores;
     problem.scoreQuad(n.heading_index, child, n.tx, n.ty, h, scores);
     for (int dy = 0; dy < 2; ++dy) {
       const int ty = n.ty + dy * h;
@@ -155,7 +167,7 @@ SearchOutcome branchAndBoundSearch(const SearchProblem& problem,
   int64_t incumbent = -1;
   if (options.prior_as_incumbent) {
     incumbent = problem.score(w.half_h, 0, w.half_x, w.half_y);
-    NodeLog{&stats, traversal}.add(w.half_h, 0, w.half_x, w.half_y, incumbent);
+    NodeLog{&stats, traversal, nullptr}.add(w.half_h, 0, w.half_x, w.half_y, incumbent);
   }
 
   // Exhaustive over the coarsest layer (Algorithm 3, lines 5-17), four nodes per pass over the
@@ -188,6 +200,7 @@ SearchOutcome branchAndBoundSearch(const SearchProblem& problem,
   std::atomic<int64_t> shared_best{incumbent};
   std::vector<Leaf> leaves(static_cast<size_t>(groups));
   std::vector<SearchStats> group_stats(static_cast<size_t>(groups), stats);
+  std::vector<std::vector<SearchOutcome::Branched>> group_branched(static_cast<size_t>(groups));
   for (SearchStats& g : group_stats) {
     g.evaluations = 0;
     g.evaluations_per_layer.assign(top + 1, 0);
@@ -195,7 +208,8 @@ SearchOutcome branchAndBoundSearch(const SearchProblem& problem,
   auto pass = [&](int g) {
     leaves[static_cast<size_t>(g)] =
         bestFirst(problem, all_top, g, groups, shared_best,
-                  {&group_stats[static_cast<size_t>(g)], groups == 1 ? traversal : nullptr});
+                  {&group_stats[static_cast<size_t>(g)], groups == 1 ? traversal : nullptr,
+                   &group_branched[static_cast<size_t>(g)]});
   };
   if (groups == 1) {
     pass(0);
@@ -223,6 +237,14 @@ SearchOutcome branchAndBoundSearch(const SearchProblem& problem,
   }
   SearchOutcome out = makeOutcome(problem, best.j, best.tx, best.ty, best.score, std::move(stats));
   out.top_scores = std::move(all_top);
+  // The passes branch disjoint headings: their nodes' keys are distinct.
+  for (std::vector<SearchOutcome::Branched>& g : group_branched) {
+    out.branched.insert(out.branched.end(), g.begin(), g.end());
+  }
+  std::sort(out.branched.begin(), out.branched.end(),
+            [](const SearchOutcome::Branched& a, const SearchOutcome::Branched& b) {
+              return a.key < b.key;
+            });
   return out;
 }
 

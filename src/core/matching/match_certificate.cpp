@@ -140,9 +140,17 @@ MatchCertificate certifyOptimum(const SearchProblem& problem, const SearchOutcom
   // only when that node is still the next one popped (nothing pushed meanwhile outranks it),
   // and counted only then: the proof, its evaluations and its budget are the same as on one
   // thread.
+  // A node the search branched keeps its children's scores (the same numbers): they are
+  // counted as evaluations all the same, so that the proof's budget does not depend on what
+  // the search happened to branch (with a pool, that varies from run to run).
   auto expand = [&](const Node& n, int64_t scores[4]) {
     const int h = 1 << (n.layer - 1);
-    problem.scoreQuad(n.heading_index, n.layer - 1, n.tx, n.ty, h, scores);
+    const int64_t* known = optimum.childScores(n.heading_index, n.layer - 1, n.tx, n.ty);
+    if (known != nullptr) {
+      std::copy(known, known + 4, scores);
+    } else {
+      problem.scoreQuad(n.heading_index, n.layer - 1, n.tx, n.ty, h, scores);
+    }
   };
   auto sameNode = [](const Node& a, const Node& b) {
     return a.bound == b.bound && a.heading_index == b.heading_index && a.tx == b.tx &&

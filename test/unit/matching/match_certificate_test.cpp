@@ -74,13 +74,39 @@ RasterOptions randomRasterOptions() {
   return ro;
 }
 
+/// When the search kept its branched nodes' children (SearchOutcome::branched): checks that
+/// they are the problem's scores and that the proof reading them equals the one scoring them
+/// itself, evaluation count included, and returns true.
+bool sameWithoutTheSearchsBranches(const SearchProblem& problem, const SearchOutcome& opt,
+                                   const CertificateOptions& o, const MatchCertificate& cert,
+                                   int c) {
+  if (opt.branched.empty()) return false;
+  for (const SearchOutcome::Branched& b : opt.branched) {
+    const int j = static_cast<int>(b.key >> 48), layer = static_cast<int>((b.key >> 32) & 0xffff);
+    const int ty = static_cast<int>((b.key >> 16) & 0xffff), tx = static_cast<int>(b.key & 0xffff);
+    int64_t quad[4];
+    problem.scoreQuad(j, layer, tx, ty, 1 << layer, quad);
+    EXPECT_TRUE(std::equal(quad, quad + 4, b.scores)) << "case " << c;
+    EXPECT_EQ(opt.childScores(j, layer, tx, ty), b.scores) << "case " << c;
+  }
+  SearchOutcome unbranched = opt;
+  unbranched.branched.clear();
+  const MatchCertificate alone = certifyOptimum(problem, unbranched, o);
+  EXPECT_EQ(alone.failure, cert.failure) << "case " << c;
+  EXPECT_EQ(alone.evaluations, cert.evaluations) << "case " << c;
+  EXPECT_EQ(alone.protection_xy_m, cert.protection_xy_m) << "case " << c;
+  EXPECT_EQ(alone.protection_heading_rad, cert.protection_heading_rad) << "case " << c;
+  EXPECT_EQ(alone.separation_per_point, cert.separation_per_point) << "case " << c;
+  return true;
+}
+
 TEST(MatchCertificate, EqualsBruteForceOnRandomCases) {
   const GmmMap map = testing::randomMap(11, testing::randomMapGeometry(), -2, -2, 4, 4, 0.35);
   const RasterOptions ro = randomRasterOptions();
   const ChunkMap chunks = testing::rasterizeRandomMap(map, ro);
   std::mt19937 rng(31);
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  int certified = 0, ambiguous = 0, edge = 0, exact_separation = 0;
+  int certified = 0, ambiguous = 0, edge = 0, exact_separation = 0, with_branched = 0;
   for (int c = 0; c < 120; ++c) {
     Pose6 prior;
     prior.x = -8.0 + 16.0 * u(rng);
@@ -110,6 +136,7 @@ TEST(MatchCertificate, EqualsBruteForceOnRandomCases) {
     o.max_evaluations = 1000000;
     const MatchCertificate cert = certifyOptimum(problem.value(), opt, o);
     const Reference ref = bruteForce(problem.value(), opt, o);
+    with_branched += sameWithoutTheSearchsBranches(problem.value(), opt, o, cert, c) ? 1 : 0;
     ASSERT_EQ(cert.certified, ref.certified)
         << "case " << c << " failure " << certificateFailureName(cert.failure);
     EXPECT_EQ(cert.separation_exact, ref.rival_within_depth) << "case " << c;
@@ -141,8 +168,11 @@ TEST(MatchCertificate, EqualsBruteForceOnRandomCases) {
   EXPECT_GE(ambiguous, 10);
   EXPECT_GE(edge, 3);
   EXPECT_GE(exact_separation, 10);
-  std::printf("certified %d, ambiguous %d, window edge %d, exact separation %d of 120\n", certified,
-              ambiguous, edge, exact_separation);
+  EXPECT_GE(with_branched, 20);
+  std::printf(
+      "certified %d, ambiguous %d, window edge %d, exact separation %d, search's branches "
+      "reused %d of 120\n",
+      certified, ambiguous, edge, exact_separation, with_branched);
 }
 
 TEST(MatchCertificate, ABudgetTooSmallNeverCertifiesWhatBruteForceRejects) {
@@ -151,7 +181,7 @@ TEST(MatchCertificate, ABudgetTooSmallNeverCertifiesWhatBruteForceRejects) {
   const ChunkMap chunks = testing::rasterizeRandomMap(map, ro);
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  int budget = 0;
+  int budget = 0, with_branched = 0;
   for (int c = 0; c < 40; ++c) {
     Pose6 prior;
     prior.x = -6.0 + 12.0 * u(rng);
@@ -171,12 +201,14 @@ TEST(MatchCertificate, ABudgetTooSmallNeverCertifiesWhatBruteForceRejects) {
     o.max_evaluations = 1 + c * 5;
     const MatchCertificate cert = certifyOptimum(problem.value(), opt, o);
     const Reference ref = bruteForce(problem.value(), opt, o);
+    with_branched += sameWithoutTheSearchsBranches(problem.value(), opt, o, cert, c) ? 1 : 0;
     if (cert.certified) {
       EXPECT_TRUE(ref.certified) << "case " << c;
     }
     budget += cert.failure == CertificateFailure::kBudget ? 1 : 0;
   }
   EXPECT_GT(budget, 10) << "the small budgets stop most proofs";
+  EXPECT_GE(with_branched, 20);
 }
 
 TEST(MatchCertificate, DisabledReportsDisabled) {

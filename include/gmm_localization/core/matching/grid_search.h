@@ -39,6 +39,23 @@ struct SearchOutcome {
   /// heading j and block (bx, by) of stride 2^top_layer (nx, ny blocks per axis), so that the
   /// certificate (match_certificate.h) need not score that layer again. Empty otherwise.
   std::vector<int64_t> top_scores;
+  /// Branch-and-bound only: the children's scores of every node it branched, sorted by key,
+  /// so that the certificate need not score them again (childScores()). Empty otherwise.
+  struct Branched {
+    uint64_t key;       ///< branchKey(heading, layer of the children, tx, ty)
+    int64_t scores[4];  ///< the four children's scores, as SearchProblem::scoreQuad gives them
+  };
+  std::vector<Branched> branched;
+  /// The key of a branched node: its heading, its children's layer and its first translation.
+  static uint64_t branchKey(int heading_index, int child_layer, int tx, int ty) {
+    return (static_cast<uint64_t>(static_cast<uint16_t>(heading_index)) << 48) |
+           (static_cast<uint64_t>(static_cast<uint16_t>(child_layer)) << 32) |
+           (static_cast<uint64_t>(static_cast<uint16_t>(ty)) << 16) |
+           static_cast<uint64_t>(static_cast<uint16_t>(tx));
+  }
+  /// The children's scores of the node (heading, child_layer, tx, ty) when the search branched
+  /// it, else null.
+  const int64_t* childScores(int heading_index, int child_layer, int tx, int ty) const;
 };
 
 /// One node the branch-and-bound scored (for the paper's Fig. 9 traversal picture).
