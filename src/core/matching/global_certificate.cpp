@@ -53,9 +53,10 @@ struct SharedProof {
 /// Best-first proof over the roots r with r % queues == q: every node whose bound reaches
 /// `floor` and that can widen the queue's protection level, touch the border or hold a pose
 /// elsewhere is split, down to the leaves.
-QueueProof proveQueue(const SearchProblem& problem, const GlobalSearchOptions& search,
-                      const IntervalGeometry& geometry, int64_t floor, int64_t budget,
-                      double typical_range, int q, int queues, SharedProof& shared) {
+QueueProof proveQueue(const SearchProblem& problem, const SearchOutcome& optimum,
+                      const GlobalSearchOptions& search, const IntervalGeometry& geometry,
+                      int64_t floor, int64_t budget, double typical_range, int q, int queues,
+                      SharedProof& shared) {
   QueueProof out;
   auto matters = [&](const IntervalNode& n, const IntervalGeometry::Extent& e) {
     return n.bound >= floor &&
@@ -67,10 +68,14 @@ QueueProof proveQueue(const SearchProblem& problem, const GlobalSearchOptions& s
     if (matters(n, geometry.of(n))) queue.push(n);
   };
   auto count = [&](int) { shared.evaluations.fetch_add(1, std::memory_order_relaxed); };
+  // A node the search scored keeps its bound (the same number): counted all the same, so that
+  // the budget does not depend on what the search's queues happened to score.
   auto bound = [&](int j0, int hl, int layer, int tx, int ty) {
     count(layer);
-    return headingIntervalBound(problem, j0, hl, layer, tx, ty, nullptr,
-                                search.max_reads_per_point);
+    const int64_t* known = optimum.intervalBound(j0, hl, layer, tx, ty);
+    return known != nullptr ? *known
+                            : headingIntervalBound(problem, j0, hl, layer, tx, ty, nullptr,
+                                                   search.max_reads_per_point);
   };
   search_detail::forEachIntervalRoot(
       problem, search, [&](int j0, int hl, int layer, int tx, int ty, int64_t index) {
@@ -133,8 +138,8 @@ MatchCertificate certifyGlobalOptimum(const SearchProblem& problem, const Search
   std::vector<QueueProof> proofs(static_cast<size_t>(queues));
   parallelFor(pool, queues, [&](int k) {
     proofs[static_cast<size_t>(k)] =
-        proveQueue(problem, search, geometry, floor, o.global_max_evaluations, typical_range, k,
-                   queues, shared);
+        proveQueue(problem, optimum, search, geometry, floor, o.global_max_evaluations,
+                   typical_range, k, queues, shared);
   });
   bool border = false, ambiguous = false, pending = false;
   for (const QueueProof& p : proofs) {

@@ -236,6 +236,7 @@ struct QueueResult {
   int64_t heading_splits = 0;
   int64_t translation_splits = 0;
   int64_t point_lookups = 0;
+  std::vector<SearchOutcome::IntervalBound> bounds;  ///< every node bound it computed
 };
 
 /// State the queues share: the best leaf score proven so far (the pruning threshold) and the
@@ -256,7 +257,8 @@ struct SharedSearch {
 
 /// Best-first branch-and-bound over the roots r with r % queues == q.
 QueueResult searchQueue(const SearchProblem& problem, const GlobalSearchOptions& options,
-                        double typical_range, int q, int queues, SharedSearch& shared) {
+                        double typical_range, int q, int queues, bool keep_bounds,
+                        SharedSearch& shared) {
   const int max_layer = problem.map().options().num_layers;
   const int root_layer = search_detail::intervalRootLayer(problem, options);
   QueueResult out;
@@ -275,8 +277,12 @@ QueueResult searchQueue(const SearchProblem& problem, const GlobalSearchOptions&
   };
   auto bound = [&](int j0, int hl, int layer, int tx, int ty) {
     count(layer);
-    return headingIntervalBound(problem, j0, hl, layer, tx, ty, &out.point_lookups,
-                                options.max_reads_per_point);
+    const int64_t b = headingIntervalBound(problem, j0, hl, layer, tx, ty, &out.point_lookups,
+                                           options.max_reads_per_point);
+    if (keep_bounds) {
+      out.bounds.push_back({SearchOutcome::intervalKey(j0, hl, layer, tx, ty), b});
+    }
+    return b;
   };
   std::priority_queue<IntervalNode, std::vector<IntervalNode>, IntervalLower> queue;
   auto push = [&](const IntervalNode& n) {
@@ -345,9 +351,13 @@ GlobalSearchOutcome globalBranchAndBound(const SearchProblem& problem,
   // smallest key among equal scores (global_search.h), for any number of queues.
   const int queues = options.queues > 0 ? options.queues : (pool != nullptr ? pool->threads() : 1);
   std::vector<QueueResult> results(static_cast<size_t>(queues));
+  // The bounds are kept for the certificate when every node fits the key.
+  constexpr int kKeyLimit = 65535;
+  const bool keep_bounds = w.sizeH() <= kKeyLimit && w.sizeX() <= kKeyLimit &&
+                           w.sizeY() <= kKeyLimit && std::max(root_layer, max_layer) <= 255;
   parallelFor(pool, queues, [&](int q) {
     results[static_cast<size_t>(q)] =
-        searchQueue(problem, options, typical_range, q, queues, shared);
+        searchQueue(problem, options, typical_range, q, queues, keep_bounds, shared);
   });
   const QueueResult* best = nullptr;
   for (const QueueResult& r : results) {
@@ -370,6 +380,13 @@ GlobalSearchOutcome globalBranchAndBound(const SearchProblem& problem,
   if (best != nullptr && !shared.budget_hit) {
     out.best = search_detail::makeOutcome(problem, best->leaf.j0, best->leaf.tx, best->leaf.ty,
                                           best->leaf.bound, std::move(stats));
+    // The queues score disjoint subtrees of distinct roots: every key appears once.
+    std::vector<SearchOutcome::IntervalBound>& all = out.best.interval_bounds;
+    for (const QueueResult& r : results) all.insert(all.end(), r.bounds.begin(), r.bounds.end());
+    std::sort(all.begin(), all.end(),
+              [](const SearchOutcome::IntervalBound& a, const SearchOutcome::IntervalBound& b) {
+                return a.key < b.key;
+              });
     return out;
   }
   // Budget reached or cancelled (or, were a bound not admissible, nothing left): the prior, not

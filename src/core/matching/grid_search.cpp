@@ -34,6 +34,14 @@ const int64_t* SearchOutcome::childScores(int heading_index, int child_layer, in
   return it != branched.end() && it->key == key ? it->scores : nullptr;
 }
 
+const int64_t* SearchOutcome::intervalBound(int j0, int heading_level, int layer, int tx,
+                                            int ty) const {
+  const uint64_t key = intervalKey(j0, heading_level, layer, tx, ty);
+  const auto it = std::lower_bound(interval_bounds.begin(), interval_bounds.end(), key,
+                                   [](const IntervalBound& b, uint64_t k) { return b.key < k; });
+  return it != interval_bounds.end() && it->key == key ? &it->bound : nullptr;
+}
+
 namespace {
 
 using search_detail::keyLess;

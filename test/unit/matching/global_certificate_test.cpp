@@ -97,6 +97,28 @@ TEST(GlobalCertificate, EqualsBruteForceOnRandomCases) {
     const Reference ref = bruteForce(problem.value(), g.best, co);
     EXPECT_EQ(ref.failure(), cert.failure) << "case " << c;
     EXPECT_EQ(cert.failure == CertificateFailure::kNone, cert.certified) << "case " << c;
+    if (c % 2 == 1) {
+      // The bounds the search kept are the problem's, and on one queue the proof reading them
+      // is the one computing them itself, evaluation count included.
+      ASSERT_FALSE(g.best.interval_bounds.empty()) << "case " << c;
+      for (size_t i = 0; i < g.best.interval_bounds.size(); i += 7) {
+        const SearchOutcome::IntervalBound& b = g.best.interval_bounds[i];
+        const int j0 = static_cast<int>(b.key >> 48), hl = static_cast<int>((b.key >> 40) & 0xff);
+        const int layer = static_cast<int>((b.key >> 32) & 0xff);
+        const int ty = static_cast<int>((b.key >> 16) & 0xffff),
+                  tx = static_cast<int>(b.key & 0xffff);
+        EXPECT_EQ(b.bound, headingIntervalBound(problem.value(), j0, hl, layer, tx, ty, nullptr,
+                                                go.max_reads_per_point))
+            << "case " << c;
+      }
+      SearchOutcome alone = g.best;
+      alone.interval_bounds.clear();
+      const MatchCertificate computed = certifyGlobalOptimum(problem.value(), alone, co, go);
+      EXPECT_EQ(computed.failure, cert.failure) << "case " << c;
+      EXPECT_EQ(computed.evaluations, cert.evaluations) << "case " << c;
+      EXPECT_EQ(computed.protection_xy_m, cert.protection_xy_m) << "case " << c;
+      EXPECT_EQ(computed.protection_heading_rad, cert.protection_heading_rad) << "case " << c;
+    }
     if (cert.certified) {
       EXPECT_NEAR(ref.protection_xy_m, cert.protection_xy_m, 1e-9) << "case " << c;
       EXPECT_NEAR(ref.protection_heading_rad, cert.protection_heading_rad, 1e-9) << "case " << c;

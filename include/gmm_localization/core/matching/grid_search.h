@@ -56,6 +56,24 @@ struct SearchOutcome {
   /// The children's scores of the node (heading, child_layer, tx, ty) when the search branched
   /// it, else null.
   const int64_t* childScores(int heading_index, int child_layer, int tx, int ty) const;
+
+  /// Global (heading-interval) search only: the bound of every node it scored, sorted by key,
+  /// so that the global certificate need not compute them again (intervalBound()). Empty
+  /// otherwise, and when the window is too large for the key (over 65,535 headings or cells).
+  struct IntervalBound {
+    uint64_t key;  ///< intervalKey(j0, heading_level, layer, tx, ty)
+    int64_t bound;
+  };
+  std::vector<IntervalBound> interval_bounds;
+  static uint64_t intervalKey(int j0, int heading_level, int layer, int tx, int ty) {
+    return (static_cast<uint64_t>(static_cast<uint16_t>(j0)) << 48) |
+           (static_cast<uint64_t>(static_cast<uint8_t>(heading_level)) << 40) |
+           (static_cast<uint64_t>(static_cast<uint8_t>(layer)) << 32) |
+           (static_cast<uint64_t>(static_cast<uint16_t>(ty)) << 16) |
+           static_cast<uint64_t>(static_cast<uint16_t>(tx));
+  }
+  /// The bound the search computed for that node, else null.
+  const int64_t* intervalBound(int j0, int heading_level, int layer, int tx, int ty) const;
 };
 
 /// One node the branch-and-bound scored (for the paper's Fig. 9 traversal picture).
