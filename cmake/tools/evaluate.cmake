@@ -28,10 +28,10 @@ gmm_add_tool(evaluate SOURCES src/tools/evaluate/evaluate.cpp LIBS gmm_evaluate)
 target_compile_definitions(evaluate PRIVATE GMM_CONFIG_DIR="${CMAKE_CURRENT_SOURCE_DIR}/config")
 
 if(CATKIN_ENABLE_TESTING)
-  # The evaluation maths, the YAML parameter source and the bag reader (no master; the bag
-  # reader's test writes a temporary bag).
+  # The evaluation maths, the YAML parameter source, the bag reader and the recorded-replay
+  # reader (no master; the bag tests write temporary bags).
   foreach(test_name evaluate_metrics_test evaluate_params_test evaluate_bag_test
-      evaluate_map_frame_test)
+      evaluate_map_frame_test evaluate_recorded_test)
     catkin_add_gtest(tools_${test_name} test/tools/evaluate/${test_name}.cpp
       WORKING_DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR})
     target_link_libraries(tools_${test_name} gmm_evaluate gtest_main)

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <ostream>
+#include <string>
 
 #include <nav_msgs/Odometry.h>
 #include <rosbag/bag.h>
@@ -59,6 +60,29 @@ MatchRow rowOf(const MatchStatus& s, const Trajectory& truth) {
   return r;
 }
 
+/// Messages of a topic that did not deserialize as the type this build expects.
+struct ForeignMessages {
+  size_t count = 0;
+  std::string datatype, md5;  ///< of the first one
+
+  void add(const rosbag::MessageInstance& m) {
+    if (count++ == 0) {
+      datatype = m.getDataType();
+      md5 = m.getMD5Sum();
+    }
+  }
+  /// Empty when there were none, else what they were against what this build reads.
+  std::string describe(const std::string& topic, const std::string& want_type,
+                       const std::string& want_md5) const {
+    if (count == 0) return {};
+    const std::string what = datatype == want_type
+                                 ? "an older or newer definition of " + datatype + " (md5 " + md5 +
+                                       "; this build reads md5 " + want_md5 + ")"
+                                 : datatype + ", not " + want_type;
+    return std::to_string(count) + " message(s) on " + topic + " are " + what;
+  }
+};
+
 }  // namespace
 
 Result<EvaluationResults> runRecordedEvaluation(const RecordedEvaluationConfig& c,
@@ -78,19 +102,28 @@ Result<EvaluationResults> runRecordedEvaluation(const RecordedEvaluationConfig& 
   out.info.dataset = c.dataset;
   out.info.bag = c.bag;
   size_t statuses = 0, odometry = 0;
+  // Messages on the two topics whose definition is not the one this build reads (a recording
+  // from an older MatchStatus, or another type on the topic): counted, never silently skipped.
+  ForeignMessages foreign_status, foreign_ekf;
   double next_ekf = -INFINITY;
   rosbag::View view(bag,
                     rosbag::TopicQuery(std::vector<std::string>{c.topics.ekf, c.topics.status}));
   for (const rosbag::MessageInstance& m : view) {
     if (m.getTopic() == c.topics.status) {
       const auto s = m.instantiate<MatchStatus>();
-      if (!s) continue;
+      if (!s) {
+        foreign_status.add(m);
+        continue;
+      }
       ++statuses;
       out.matches.push_back(rowOf(*s, *truth));
       out.info.dropped_scans += s->dropped_scans;
     } else {
       const auto o = m.instantiate<nav_msgs::Odometry>();
-      if (!o) continue;
+      if (!o) {
+        foreign_ekf.add(m);
+        continue;
+      }
       ++odometry;
       const double t = o->header.stamp.toSec();
       if (c.ekf_rate_hz > 0.0 && t < next_ekf) continue;
@@ -109,10 +142,24 @@ Result<EvaluationResults> runRecordedEvaluation(const RecordedEvaluationConfig& 
       out.ekf.push_back(row);
     }
   }
-  if (statuses == 0) {
+  const std::string status_foreign =
+      foreign_status.describe(c.topics.status, ros::message_traits::DataType<MatchStatus>::value(),
+                              ros::message_traits::MD5Sum<MatchStatus>::value());
+  const std::string ekf_foreign =
+      foreign_ekf.describe(c.topics.ekf, ros::message_traits::DataType<nav_msgs::Odometry>::value(),
+                           ros::message_traits::MD5Sum<nav_msgs::Odometry>::value());
+  if (statuses == 0 && !status_foreign.empty()) {
+    return R::failure(status_foreign +
+                      ": none could be read, so the matches cannot be scored. Replay the source "
+                      "bag again with this build (replay.launch record:=...) and evaluate that "
+                      "recording");
+  }
+  if (!status_foreign.empty()) out.info.notes.push_back(status_foreign + " (skipped)");
+  if (!ekf_foreign.empty()) out.info.notes.push_back(ekf_foreign + " (skipped)");
+  if (statuses == 0 && foreign_status.count == 0) {
     out.info.notes.push_back("no " + c.topics.status + " message: the matcher never ran");
   }
-  if (odometry == 0) {
+  if (odometry == 0 && foreign_ekf.count == 0) {
     out.info.notes.push_back("no " + c.topics.ekf + " message: the EKF never started");
   }
   // The drive's span: the ground truth the player published.
