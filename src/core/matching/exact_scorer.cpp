@@ -15,7 +15,10 @@ RasterWindow windowAround(const ChunkMap& map, double x, double y, double r) {
 
 ExactScorer::ExactScorer(const ChunkMap& map, double ll_floor, double center_x_m, double center_y_m,
                          double radius_m, double kernel_sigma_m)
-    : map_(map), floor_(ll_floor), window_(windowAround(map, center_x_m, center_y_m, radius_m)) {
+    : map_(map),
+      floor_(ll_floor),
+      window_(windowAround(map, center_x_m, center_y_m, radius_m)),
+      row_cells_(int64_t{1} << map.options().chunk_shift) {
   // Kernel width in cell units; at most a cell so the 3 x 3 neighbourhood holds the kernel.
   const double s = std::clamp(kernel_sigma_m / map.geometry().resolution_m, 0.05, 1.0);
   const double inv_two_s2 = 1.0 / (2.0 * s * s);
@@ -64,24 +67,30 @@ double ExactScorer::pointLogLikelihood(const Eigen::Vector3d& p) const {
   return weightedMean(c.fx, c.fy, ll);
 }
 
-void ExactScorer::blockLogLikelihoods(int64_t cx, int64_t cy, double z, double ll[9]) const {
+const MixtureLogTerms* ExactScorer::blockFirst(int64_t cx, int64_t cy) const {
   const MapChunk* chunk = window_.chunk(cx, cy);
-  const int64_t mask = chunk != nullptr ? chunk->cells() - 1 : 0;
+  if (chunk == nullptr || !chunk->hasMixtures() || chunk->cells() != row_cells_) return nullptr;
+  const int64_t mask = chunk->cells() - 1;
   const int64_t lx = cx & mask, ly = cy & mask;
-  if (chunk != nullptr && chunk->hasMixtures() && lx >= 1 && ly >= 1 && lx + 1 <= mask &&
-      ly + 1 <= mask) {
-    // The whole 3 x 3 block lies in one chunk.
-    for (int ky = 0; ky < 3; ++ky) {
-      for (int kx = 0; kx < 3; ++kx) {
-        const MixtureLogTerms& t =
-            chunk->logTerms(static_cast<int>(lx + kx - 1), static_cast<int>(ly + ky - 1));
-        ll[ky * 3 + kx] = t.flooredLogLikelihood(z, floor_);
-      }
-    }
+  if (lx < 1 || ly < 1 || lx + 1 > mask || ly + 1 > mask) return nullptr;
+  return &chunk->logTerms(static_cast<int>(lx - 1), static_cast<int>(ly - 1));
+}
+
+void ExactScorer::blockLogLikelihoods(int64_t cx, int64_t cy, double z, double ll[9]) const {
+  const MixtureLogTerms* first = blockFirst(cx, cy);
+  if (first != nullptr) {
+    blockLogLikelihoods(first, z, ll);  // the whole 3 x 3 block lies in one chunk
   } else {
     for (int ky = 0; ky < 3; ++ky) {
       for (int kx = 0; kx < 3; ++kx) ll[ky * 3 + kx] = floored({cx + kx - 1, cy + ky - 1}, z);
     }
+  }
+}
+
+void ExactScorer::blockLogLikelihoods(const MixtureLogTerms* first, double z, double ll[9]) const {
+  for (int ky = 0; ky < 3; ++ky) {
+    const MixtureLogTerms* row = first + ky * row_cells_;
+    for (int kx = 0; kx < 3; ++kx) ll[ky * 3 + kx] = row[kx].flooredLogLikelihood(z, floor_);
   }
 }
 
@@ -161,9 +170,15 @@ double ExactScorer::scoreReusing(const PointList& base_points, const Pose6& pose
   constexpr size_t kAhead = 8;
   std::vector<Eigen::Vector2d> offset(base_points.size());
   std::vector<uint8_t> evaluate(base_points.size());
+  std::vector<const MixtureLogTerms*> first(base_points.size());  // blockFirst() when evaluated
   std::vector<size_t> block_end(base_points.size());
   auto ask = [&](size_t i) {
-    if (evaluate[i]) prefetchBlock((*out)[i].cx, (*out)[i].cy);
+    if (first[i] == nullptr) return;
+    for (int ky = 0; ky < 3; ++ky) {
+      const MixtureLogTerms* row = first[i] + ky * row_cells_;
+      __builtin_prefetch(row);
+      __builtin_prefetch(reinterpret_cast<const char*>(row + 3) - 1);
+    }
   };
   auto place = [&](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i) {
@@ -177,11 +192,13 @@ double ExactScorer::scoreReusing(const PointList& base_points, const Pose6& pose
       if (can_reuse && (*reuse)[i].cx == o.cx && (*reuse)[i].cy == o.cy && (*reuse)[i].z == z) {
         m = (*reuse)[i];
         evaluate[i] = 0;
+        first[i] = nullptr;
       } else {
         m.cx = o.cx;
         m.cy = o.cy;
         m.z = z;
         evaluate[i] = 1;
+        first[i] = blockFirst(o.cx, o.cy);
       }
     }
     for (size_t i = begin; i < std::min(end, begin + kAhead); ++i) ask(i);
@@ -191,24 +208,14 @@ double ExactScorer::scoreReusing(const PointList& base_points, const Pose6& pose
       [&](size_t i) {
         if (i + kAhead < block_end[i]) ask(i + kAhead);
         CellBlockMemo& m = (*out)[i];
-        if (evaluate[i]) blockLogLikelihoods(m.cx, m.cy, m.z, m.ll);
+        if (first[i] != nullptr) {
+          blockLogLikelihoods(first[i], m.z, m.ll);
+        } else if (evaluate[i]) {
+          blockLogLikelihoods(m.cx, m.cy, m.z, m.ll);  // a block across a chunk's edge
+        }
         return weightedMean(offset[i].x(), offset[i].y(), m.ll);
       },
       place);
-}
-
-void ExactScorer::prefetchBlock(int64_t cx, int64_t cy) const {
-  const MapChunk* chunk = window_.chunk(cx, cy);
-  if (chunk == nullptr || !chunk->hasMixtures()) return;
-  const int64_t mask = chunk->cells() - 1;
-  const int64_t lx = cx & mask, ly = cy & mask;
-  if (lx < 1 || ly < 1 || lx + 1 > mask || ly + 1 > mask) return;
-  for (int ky = -1; ky <= 1; ++ky) {
-    const MixtureLogTerms* row =
-        &chunk->logTerms(static_cast<int>(lx - 1), static_cast<int>(ly + ky));
-    __builtin_prefetch(row);
-    __builtin_prefetch(reinterpret_cast<const char*>(row + 3) - 1);
-  }
 }
 
 }  // namespace gmm_localization

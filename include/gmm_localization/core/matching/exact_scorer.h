@@ -64,15 +64,18 @@ class ExactScorer {
   template <typename PointValue, typename BlockStart>
   double blockSums(size_t points, TaskPool* pool, const PointValue& value,
                    const BlockStart& block_start) const;
-  /// Asks the memory for the 3 x 3 block of cells around cell (cx, cy) (nothing when the block
-  /// crosses a chunk's edge).
-  void prefetchBlock(int64_t cx, int64_t cy) const;
+  /// The first (lowest x, y) cell of the 3 x 3 block around cell (cx, cy) when the whole block
+  /// lies in one loaded chunk (its rows row_cells_ cells apart), else null.
+  const MixtureLogTerms* blockFirst(int64_t cx, int64_t cy) const;
+  /// blockLogLikelihoods of the block whose blockFirst() is `first`.
+  void blockLogLikelihoods(const MixtureLogTerms* first, double z, double ll[9]) const;
   double kernel(double d_cells) const;
   static constexpr int kKernelTableSize = 1538;        // covers [0, 1.5] cells and one guard entry
   static constexpr double kKernelTableScale = 1024.0;  // entries per cell
   const ChunkMap& map_;
   double floor_;
   RasterWindow window_;
+  int64_t row_cells_;  ///< cells per chunk row (every chunk of a map has as many)
   std::vector<double> kernel_table_;
 };
 
