@@ -261,6 +261,7 @@ RegistrationResult<MatchResult> Registration::finishGlobal(
   out.confirm_search = out.search;
   out.global_certificate = global_certificate;
   out.search = search;
+  out.search.dropCertificateMemos();
   out.search.stats.evaluations += out.confirm_search.stats.evaluations;
   MatchCertificate& c = out.certificate;
   if (!global_certificate.certified && c.failure != CertificateFailure::kDisabled) {
@@ -338,6 +339,7 @@ RegistrationResult<MatchResult> Registration::finishLocal(
   CertificateOptions certificate = options_.certificate;
   certificate.max_evaluations = certificate.budgetFor(request.half_x_m, request.half_y_m);
   out.certificate = certifyOptimum(prepared.problem, out.search, certificate, pool_.get());
+  out.search.dropCertificateMemos();  // what the search kept for the proof: done with
   {
     const Protection p =
         protectionOf(out.certificate, out.search.pose, out.pose, map.geometry().resolution_m,

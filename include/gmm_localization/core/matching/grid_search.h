@@ -74,6 +74,13 @@ struct SearchOutcome {
   }
   /// The bound the search computed for that node, else null.
   const int64_t* intervalBound(int j0, int heading_level, int layer, int tx, int ty) const;
+
+  /// Frees top_scores, branched and interval_bounds (once the certificate is proved).
+  void dropCertificateMemos() {
+    top_scores = {};
+    branched = {};
+    interval_bounds = {};
+  }
 };
 
 /// One node the branch-and-bound scored (for the paper's Fig. 9 traversal picture).
