@@ -46,7 +46,9 @@ struct SearchOutcome {
     int64_t scores[4];  ///< the four children's scores, as SearchProblem::scoreQuad gives them
   };
   std::vector<Branched> branched;
-  /// The key of a branched node: its heading, its children's layer and its first translation.
+  /// The key of a branched node: its heading, its children's layer and its first translation,
+  /// 16 bits each (a valid window is at most 8,193 cells and 4,097 headings wide:
+  /// SearchWindow::validate).
   static uint64_t branchKey(int heading_index, int child_layer, int tx, int ty) {
     return (static_cast<uint64_t>(static_cast<uint16_t>(heading_index)) << 48) |
            (static_cast<uint64_t>(static_cast<uint16_t>(child_layer)) << 32) |
