@@ -171,7 +171,6 @@ double ExactScorer::scoreReusing(const PointList& base_points, const Pose6& pose
   std::vector<Eigen::Vector2d> offset(base_points.size());
   std::vector<uint8_t> evaluate(base_points.size());
   std::vector<const MixtureLogTerms*> first(base_points.size());  // blockFirst() when evaluated
-  std::vector<size_t> block_end(base_points.size());
   auto ask = [&](size_t i) {
     if (first[i] == nullptr) return;
     for (int ky = 0; ky < 3; ++ky) {
@@ -187,7 +186,6 @@ double ExactScorer::scoreReusing(const PointList& base_points, const Pose6& pose
       const CellOffset o =
           cellOffset(g, c * q.x() - s * q.y() + pose.x, s * q.x() + c * q.y() + pose.y);
       offset[i] = {o.fx, o.fy};
-      block_end[i] = end;
       CellBlockMemo& m = (*out)[i];
       if (can_reuse && (*reuse)[i].cx == o.cx && (*reuse)[i].cy == o.cy && (*reuse)[i].z == z) {
         m = (*reuse)[i];
@@ -206,7 +204,9 @@ double ExactScorer::scoreReusing(const PointList& base_points, const Pose6& pose
   return blockSums(
       base_points.size(), pool,
       [&](size_t i) {
-        if (i + kAhead < block_end[i]) ask(i + kAhead);
+        const size_t block_end =
+            std::min(base_points.size(), (i / kBlockPoints + 1) * kBlockPoints);
+        if (i + kAhead < block_end) ask(i + kAhead);
         CellBlockMemo& m = (*out)[i];
         if (first[i] != nullptr) {
           blockLogLikelihoods(first[i], m.z, m.ll);

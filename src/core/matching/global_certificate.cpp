@@ -152,11 +152,11 @@ MatchCertificate certifyGlobalOptimum(const SearchProblem& problem, const Search
   out.evaluations = shared.evaluations.load();
   if (cancelled != nullptr) *cancelled = shared.cancelled;
   // Cancelled: unproved, as a proof stopped at its budget.
-  out.failure = ambiguous && !shared.cancelled ? CertificateFailure::kAmbiguous
-                : shared.cancelled             ? CertificateFailure::kBudget
-                : pending                      ? CertificateFailure::kBudget
-                : border                       ? CertificateFailure::kWindowEdge
-                                               : CertificateFailure::kNone;
+  out.failure = shared.cancelled ? CertificateFailure::kBudget
+                : ambiguous      ? CertificateFailure::kAmbiguous
+                : pending        ? CertificateFailure::kBudget
+                : border         ? CertificateFailure::kWindowEdge
+                                 : CertificateFailure::kNone;
   out.certified = out.failure == CertificateFailure::kNone;
   out.separation_exact = false;  // a lower bound: the margin (or 0 when ambiguous)
   out.separation_per_point = ambiguous ? 0.0

@@ -257,8 +257,7 @@ struct SharedSearch {
 
 /// Best-first branch-and-bound over the roots r with r % queues == q.
 QueueResult searchQueue(const SearchProblem& problem, const GlobalSearchOptions& options,
-                        double typical_range, int q, int queues, bool keep_bounds,
-                        SharedSearch& shared) {
+                        double typical_range, int q, int queues, SharedSearch& shared) {
   const int max_layer = problem.map().options().num_layers;
   const int root_layer = search_detail::intervalRootLayer(problem, options);
   QueueResult out;
@@ -279,9 +278,7 @@ QueueResult searchQueue(const SearchProblem& problem, const GlobalSearchOptions&
     count(layer);
     const int64_t b = headingIntervalBound(problem, j0, hl, layer, tx, ty, &out.point_lookups,
                                            options.max_reads_per_point);
-    if (keep_bounds) {
-      out.bounds.push_back({SearchOutcome::intervalKey(j0, hl, layer, tx, ty), b});
-    }
+    out.bounds.push_back({SearchOutcome::intervalKey(j0, hl, layer, tx, ty), b});
     return b;
   };
   std::priority_queue<IntervalNode, std::vector<IntervalNode>, IntervalLower> queue;
@@ -351,13 +348,9 @@ GlobalSearchOutcome globalBranchAndBound(const SearchProblem& problem,
   // smallest key among equal scores (global_search.h), for any number of queues.
   const int queues = options.queues > 0 ? options.queues : (pool != nullptr ? pool->threads() : 1);
   std::vector<QueueResult> results(static_cast<size_t>(queues));
-  // The bounds are kept for the certificate when every node fits the key.
-  constexpr int kKeyLimit = 65535;
-  const bool keep_bounds = w.sizeH() <= kKeyLimit && w.sizeX() <= kKeyLimit &&
-                           w.sizeY() <= kKeyLimit && std::max(root_layer, max_layer) <= 255;
   parallelFor(pool, queues, [&](int q) {
     results[static_cast<size_t>(q)] =
-        searchQueue(problem, options, typical_range, q, queues, keep_bounds, shared);
+        searchQueue(problem, options, typical_range, q, queues, shared);
   });
   const QueueResult* best = nullptr;
   for (const QueueResult& r : results) {

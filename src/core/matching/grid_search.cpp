@@ -26,20 +26,27 @@ SearchOutcome makeOutcome(const SearchProblem& problem, int j, int tx, int ty, i
 
 }  // namespace search_detail
 
+namespace {
+/// The record of `key` in `sorted` (ordered by key), or null.
+template <typename Record>
+const Record* findByKey(const std::vector<Record>& sorted, uint64_t key) {
+  const auto it = std::lower_bound(sorted.begin(), sorted.end(), key,
+                                   [](const Record& r, uint64_t k) { return r.key < k; });
+  return it != sorted.end() && it->key == key ? &*it : nullptr;
+}
+}  // namespace
+
 const int64_t* SearchOutcome::childScores(int heading_index, int child_layer, int tx,
                                           int ty) const {
-  const uint64_t key = branchKey(heading_index, child_layer, tx, ty);
-  const auto it = std::lower_bound(branched.begin(), branched.end(), key,
-                                   [](const Branched& b, uint64_t k) { return b.key < k; });
-  return it != branched.end() && it->key == key ? it->scores : nullptr;
+  const Branched* b = findByKey(branched, branchKey(heading_index, child_layer, tx, ty));
+  return b != nullptr ? b->scores : nullptr;
 }
 
 const int64_t* SearchOutcome::intervalBound(int j0, int heading_level, int layer, int tx,
                                             int ty) const {
-  const uint64_t key = intervalKey(j0, heading_level, layer, tx, ty);
-  const auto it = std::lower_bound(interval_bounds.begin(), interval_bounds.end(), key,
-                                   [](const IntervalBound& b, uint64_t k) { return b.key < k; });
-  return it != interval_bounds.end() && it->key == key ? &it->bound : nullptr;
+  const IntervalBound* b =
+      findByKey(interval_bounds, intervalKey(j0, heading_level, layer, tx, ty));
+  return b != nullptr ? &b->bound : nullptr;
 }
 
 namespace {

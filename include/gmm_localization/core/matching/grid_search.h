@@ -59,14 +59,15 @@ struct SearchOutcome {
   /// it, else null.
   const int64_t* childScores(int heading_index, int child_layer, int tx, int ty) const;
 
-  /// Global (heading-interval) search only: the bound of every node it scored, sorted by key,
-  /// so that the global certificate need not compute them again (intervalBound()). Empty
-  /// otherwise, and when the window is too large for the key (over 65,535 headings or cells).
+  /// Global (heading-interval) search only, when complete: the bound of every node it scored,
+  /// sorted by key, so that the global certificate need not compute them again
+  /// (intervalBound()). Empty otherwise.
   struct IntervalBound {
     uint64_t key;  ///< intervalKey(j0, heading_level, layer, tx, ty)
     int64_t bound;
   };
   std::vector<IntervalBound> interval_bounds;
+  /// The key of an interval node (16 bits for j0, tx, ty and 8 for the levels: see branchKey).
   static uint64_t intervalKey(int j0, int heading_level, int layer, int tx, int ty) {
     return (static_cast<uint64_t>(static_cast<uint16_t>(j0)) << 48) |
            (static_cast<uint64_t>(static_cast<uint8_t>(heading_level)) << 40) |
