@@ -11,6 +11,10 @@ target_include_directories(gmm_core SYSTEM PRIVATE ${GeographicLib_INCLUDE_DIRS}
 target_link_libraries(gmm_core PUBLIC Eigen3::Eigen ZLIB::ZLIB Threads::Threads)
 target_link_libraries(gmm_core PRIVATE ${GeographicLib_LIBRARIES})
 target_link_options(gmm_core PRIVATE -Wl,--no-undefined)
+# Calls inside the core bind to the core's own functions: no PLT hop per call in the matching
+# loops (a point's cell values, the kernel), and GCC may inline them (nobody interposes them).
+target_compile_options(gmm_core PRIVATE -fno-semantic-interposition)
+target_link_options(gmm_core PRIVATE -Wl,-Bsymbolic-functions)
 if(NOT GMM_SANITIZE)  # sanitizer builds (-O1, instrumented) can warn spuriously: no -Werror
   target_compile_options(gmm_core PRIVATE -Werror)
 endif()
