@@ -39,8 +39,8 @@ bool spinUntil(Done done) {
 struct TaskPool::Job {
   const std::function<void(int)>* fn = nullptr;
   int n = 0;
-  std::atomic<int> next{0};
-  std::atomic<int> active{0};  ///< workers inside drain()
+  std::atomic<int> next{0};  ///< the next piece to claim
+  std::atomic<int> done{0};  ///< pieces finished
   std::mutex error_mutex;
   std::exception_ptr error;
 };
@@ -68,7 +68,8 @@ TaskPool::~TaskPool() {
   for (std::thread& t : workers_) t.join();
 }
 
-void TaskPool::drain(Job& job) {
+int TaskPool::drain(Job& job) {
+  int finished = 0;
   for (int i = job.next.fetch_add(1); i < job.n; i = job.next.fetch_add(1)) {
     try {
       (*job.fn)(i);
@@ -76,7 +77,10 @@ void TaskPool::drain(Job& job) {
       std::lock_guard<std::mutex> lock(job.error_mutex);
       if (!job.error) job.error = std::current_exception();
     }
+    job.done.fetch_add(1);
+    ++finished;
   }
+  return finished;
 }
 
 void TaskPool::workerLoop() {
@@ -90,13 +94,8 @@ void TaskPool::workerLoop() {
       if (stop_) return;
       seen = generation_.load();
       job = job_;
-      // Counted before any piece is claimed: a caller that sees no active worker after its own
-      // drain knows that every claimed piece has finished.
-      if (job) job->active.fetch_add(1);
     }
-    if (!job) continue;
-    drain(*job);
-    job->active.fetch_sub(1);
+    if (!job || drain(*job) == 0) continue;
     { std::lock_guard<std::mutex> lock(mutex_); }
     finished_.notify_all();
   }
@@ -119,11 +118,12 @@ void TaskPool::run(int n, const std::function<void(int)>& fn) {
   }
   wake_.notify_all();
   drain(*job);
-  // Every piece has been claimed; wait for the workers still inside one. A worker that joins
-  // later finds no piece left (next >= n) and touches nothing of the caller's.
-  if (!spinUntil([&] { return job->active.load() == 0; })) {
+  // Every piece has been claimed; wait for the pieces still running on workers, not for the
+  // workers: one woken late (or preempted before it claimed anything) finds no piece left
+  // (next >= n) and touches nothing of the caller's, so the run need not wait for it.
+  if (!spinUntil([&] { return job->done.load() == n; })) {
     std::unique_lock<std::mutex> lock(mutex_);
-    finished_.wait(lock, [&] { return job->active.load() == 0; });
+    finished_.wait(lock, [&] { return job->done.load() == n; });
   }
   {
     std::lock_guard<std::mutex> lock(mutex_);

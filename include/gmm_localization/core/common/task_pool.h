@@ -45,7 +45,8 @@ class TaskPool {
  private:
   struct Job;
   void workerLoop();
-  static void drain(Job& job);
+  /// Runs the job's unclaimed pieces; returns how many it ran.
+  static int drain(Job& job);
 
   std::vector<std::thread> workers_;
   std::mutex run_mutex_;  ///< held by the run in progress (try_lock: others go serial)
