@@ -154,13 +154,17 @@ double ExactScorer::score(const PointList& base_points, const Pose6& pose, TaskP
 
 double ExactScorer::scoreReusing(const PointList& base_points, const Pose6& pose,
                                  const std::vector<CellBlockMemo>* reuse,
-                                 std::vector<CellBlockMemo>* out, TaskPool* pool) const {
+                                 std::vector<CellBlockMemo>* out, TaskPool* pool,
+                                 const std::vector<CellBlockMemo>* reuse_also) const {
   Pose6 tilt;
   tilt.roll = pose.roll;
   tilt.pitch = pose.pitch;
   const Eigen::Matrix3d R_tilt = toIsometry(tilt).linear();
   const double c = std::cos(pose.yaw), s = std::sin(pose.yaw);
-  const bool can_reuse = reuse != nullptr && reuse->size() == base_points.size();
+  auto usable = [&](const std::vector<CellBlockMemo>* m) {
+    return m != nullptr && m->size() == base_points.size() ? m : nullptr;
+  };
+  const std::vector<CellBlockMemo>* sources[2] = {usable(reuse), usable(reuse_also)};
   out->resize(base_points.size());
   const MapGeometry& g = map_.geometry();
   // Each block of points in two passes: first every point's cell block and height, then the
@@ -187,8 +191,15 @@ double ExactScorer::scoreReusing(const PointList& base_points, const Pose6& pose
           cellOffset(g, c * q.x() - s * q.y() + pose.x, s * q.x() + c * q.y() + pose.y);
       offset[i] = {o.fx, o.fy};
       CellBlockMemo& m = (*out)[i];
-      if (can_reuse && (*reuse)[i].cx == o.cx && (*reuse)[i].cy == o.cy && (*reuse)[i].z == z) {
-        m = (*reuse)[i];
+      const CellBlockMemo* same = nullptr;
+      for (const std::vector<CellBlockMemo>* from : sources) {
+        if (same == nullptr && from != nullptr && (*from)[i].cx == o.cx && (*from)[i].cy == o.cy &&
+            (*from)[i].z == z) {
+          same = &(*from)[i];
+        }
+      }
+      if (same != nullptr) {
+        m = *same;
         evaluate[i] = 0;
         first[i] = nullptr;
       } else {

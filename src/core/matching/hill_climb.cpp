@@ -112,24 +112,71 @@ PointList thinEvenly(const PointList& points, size_t max_points) {
   return out;
 }
 
+namespace {
+/// The cells a climb on one point set read: at the pose it stands on, at the pose scored last,
+/// and at the last trial one step along each axis and sign (a trial step in z, roll or pitch
+/// changes every height, so the pose it stands on has none of its cells; the same trial after
+/// steps in x, y or heading finds most of them there, heights unchanged and cells mostly too).
+class ClimbMemo {
+ public:
+  ClimbMemo(const ExactScorer& scorer, const PointList& points, TaskPool* pool)
+      : scorer_(scorer), points_(points), pool_(pool) {}
+
+  double score(const Pose6& p) {
+    last_pose_ = p;
+    last_trial_ = trialOf(p);
+    std::vector<CellBlockMemo>* same_way = last_trial_ >= 0 ? &trials_[last_trial_] : nullptr;
+    const double s = scorer_.scoreReusing(points_, p, &kept_, &last_, pool_, same_way);
+    if (same_way != nullptr) same_way->swap(last_);  // last_ keeps an older memo: any will do
+    return s;
+  }
+  /// The climb moved to the pose scored last.
+  void moved() {
+    kept_.swap(last_trial_ >= 0 ? trials_[last_trial_] : last_);
+    kept_pose_ = last_pose_;
+    has_kept_ = true;
+  }
+
+ private:
+  /// 2 * axis + (step down ? 1 : 0) when p differs from the kept pose in one coordinate, else -1.
+  int trialOf(const Pose6& p) const {
+    if (!has_kept_) return -1;
+    const double d[6] = {p.x - kept_pose_.x,         p.y - kept_pose_.y,
+                         p.z - kept_pose_.z,         p.roll - kept_pose_.roll,
+                         p.pitch - kept_pose_.pitch, p.yaw - kept_pose_.yaw};
+    int trial = -1;
+    for (int a = 0; a < 6; ++a) {
+      if (d[a] == 0.0) continue;
+      if (trial >= 0) return -1;
+      trial = 2 * a + (d[a] < 0.0 ? 1 : 0);
+    }
+    return trial;
+  }
+
+  const ExactScorer& scorer_;
+  const PointList& points_;
+  TaskPool* pool_;
+  std::vector<CellBlockMemo> kept_, last_, trials_[12];
+  Pose6 kept_pose_, last_pose_;
+  bool has_kept_ = false;
+  int last_trial_ = -1;
+};
+}  // namespace
+
 HillClimbOutcome hillClimb(const ExactScorer& scorer, const PointList& base_points,
                            const Pose6& start, const HillClimbOptions& o, TaskPool* pool) {
-  // Per point set: the cells read at the pose the climb stands on, and at the pose scored last.
-  struct Memo {
-    std::vector<CellBlockMemo> kept, last;
-  } full_memo, coarse_memo;
+  ClimbMemo full_memo(scorer, base_points, pool);
   ClimbObjective f;
-  f.full = [&](const Pose6& p) {
-    return scorer.scoreReusing(base_points, p, &full_memo.kept, &full_memo.last, pool);
-  };
-  f.full_kept = [&] { full_memo.kept.swap(full_memo.last); };
+  f.full = [&](const Pose6& p) { return full_memo.score(p); };
+  f.full_kept = [&] { full_memo.moved(); };
   PointList coarse;
   if (o.coarse_points > 0 && base_points.size() >= 2 * o.coarse_points) {
     coarse = thinEvenly(base_points, o.coarse_points);
-    f.coarse = [&](const Pose6& p) {
-      return scorer.scoreReusing(coarse, p, &coarse_memo.kept, &coarse_memo.last, pool);
-    };
-    f.coarse_kept = [&] { coarse_memo.kept.swap(coarse_memo.last); };
+  }
+  ClimbMemo coarse_memo(scorer, coarse, pool);
+  if (!coarse.empty()) {
+    f.coarse = [&](const Pose6& p) { return coarse_memo.score(p); };
+    f.coarse_kept = [&] { coarse_memo.moved(); };
   }
   return hillClimb(f, start, o);
 }

@@ -67,5 +67,88 @@ TEST_F(ExactScorerTest, ReusingTheCellsOfTheLastPoseChangesNoBit) {
   }
 }
 
+TEST_F(ExactScorerTest, ASecondMemoOfTheSameStepServesTheStepsThatMoveEveryHeight) {
+  // The climb's pattern: a step up in z is tried, the climb moves in x instead, and tries z up
+  // again. The pose it stands on has none of the heights of that trial; the earlier z trial has
+  // them for every point still in its block. Taken from there, not one bit changes.
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int c = 0; c < 6; ++c) {
+    const Pose6 truth = world_->streetPose(rng);
+    const PointList scan = thinEvenly(world_->scan(truth, 35.0, 0.25, 0.0, 400 + c), 1500);
+    const ExactScorer scorer(*chunks_, -6.0, truth.x, truth.y, 60.0);
+    Pose6 pose = truth;
+    pose.x += 0.1 * u(rng);
+    pose.roll = 0.01 * u(rng);
+    const double step = c % 2 == 0 ? 0.01 : -0.02;
+    for (int axis : {2, 3, 4}) {  // z, roll, pitch
+      std::vector<CellBlockMemo> kept, first_trial, moved, fresh, reused;
+      scorer.scoreReusing(scan, pose, nullptr, &kept);
+      auto along = [&](Pose6 p) {
+        double* coordinate[6] = {&p.x, &p.y, &p.z, &p.roll, &p.pitch, &p.yaw};
+        *coordinate[axis] += axis == 2 ? 0.02 : 0.001;
+        return p;
+      };
+      scorer.scoreReusing(scan, along(pose), &kept, &first_trial);
+      Pose6 next = pose;
+      next.x += step;
+      scorer.scoreReusing(scan, next, &kept, &moved);
+      const double without = scorer.scoreReusing(scan, along(next), nullptr, &fresh);
+      const double with =
+          scorer.scoreReusing(scan, along(next), &moved, &reused, nullptr, &first_trial);
+      EXPECT_EQ(with, without) << "case " << c << " axis " << axis;
+      for (size_t i = 0; i < fresh.size(); ++i) {
+        for (int k = 0; k < 9; ++k) ASSERT_EQ(reused[i].ll[k], fresh[i].ll[k]) << i;
+      }
+      EXPECT_LT(sameKeys(fresh, moved), 0.05) << "case " << c << " axis " << axis;
+      EXPECT_GT(sameKeys(fresh, first_trial), 0.8) << "case " << c << " axis " << axis;
+    }
+  }
+}
+
+TEST_F(ExactScorerTest, TheClimbWithItsMemosTakesThePathOfOneThatScoresEveryPoseAfresh) {
+  // hillClimb on the scorer reuses cells from several memos; the same climb on an objective
+  // that evaluates every point's cells at every pose must take the same steps and end on the
+  // same pose with the same score, bit for bit (both on all points and coarse-to-fine).
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int c = 0; c < 4; ++c) {
+    const Pose6 truth = world_->streetPose(rng);
+    const PointList scan = thinEvenly(world_->scan(truth, 35.0, 0.25, 0.0, 500 + c), 1500);
+    const ExactScorer scorer(*chunks_, -6.0, truth.x, truth.y, 60.0);
+    Pose6 start = truth;
+    start.x += 0.12 * u(rng);
+    start.y += 0.12 * u(rng);
+    start.z += 0.1 * u(rng);
+    start.yaw += 0.008 * u(rng);
+    start.pitch += 0.01 * u(rng);
+    for (size_t coarse_points : {size_t{0}, size_t{750}}) {
+      HillClimbOptions o;
+      o.coarse_points = coarse_points;
+      const HillClimbOutcome memo = hillClimb(scorer, scan, start, o);
+      ClimbObjective afresh;
+      std::vector<CellBlockMemo> scratch;
+      afresh.full = [&](const Pose6& p) { return scorer.scoreReusing(scan, p, nullptr, &scratch); };
+      const PointList coarse = thinEvenly(scan, coarse_points);
+      if (coarse_points > 0) {
+        afresh.coarse = [&](const Pose6& p) {
+          return scorer.scoreReusing(coarse, p, nullptr, &scratch);
+        };
+      }
+      const HillClimbOutcome plain = hillClimb(afresh, start, o);
+      EXPECT_EQ(memo.evaluations, plain.evaluations) << "case " << c;
+      EXPECT_EQ(memo.score, plain.score) << "case " << c;
+      EXPECT_EQ(memo.pose.x, plain.pose.x);
+      EXPECT_EQ(memo.pose.y, plain.pose.y);
+      EXPECT_EQ(memo.pose.z, plain.pose.z);
+      EXPECT_EQ(memo.pose.roll, plain.pose.roll);
+      EXPECT_EQ(memo.pose.pitch, plain.pose.pitch);
+      EXPECT_EQ(memo.pose.yaw, plain.pose.yaw);
+      EXPECT_GE(memo.score, memo.score_start);
+      EXPECT_GT(memo.evaluations, 20) << "case " << c;  // a climb, not a stop at the start
+    }
+  }
+}
+
 }  // namespace
 }  // namespace gmm_localization

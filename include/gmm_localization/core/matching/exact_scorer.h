@@ -46,10 +46,14 @@ class ExactScorer {
   /// same points at the pose the step was taken from; null or empty: none) takes its nine cell
   /// values from there instead of evaluating the mixtures again. `out` receives this pose's
   /// (resized to the points). The value equals score()'s up to the rounding of the placement
-  /// (1e-16 relative), and is the same with or without `reuse`, bit for bit.
+  /// (1e-16 relative), and is the same with or without `reuse`, bit for bit. `reuse_also`: a
+  /// second memo of the same points to take a point's cells from when `reuse` has not got them
+  /// (e.g. the last pose scored one step the same way, whose heights a step in x, y or heading
+  /// since has left as they were). Neither may be `out`.
   double scoreReusing(const PointList& base_points, const Pose6& pose,
                       const std::vector<CellBlockMemo>* reuse, std::vector<CellBlockMemo>* out,
-                      TaskPool* pool = nullptr) const;
+                      TaskPool* pool = nullptr,
+                      const std::vector<CellBlockMemo>* reuse_also = nullptr) const;
   /// Floored log-likelihood of a point in the single cell containing it (no interpolation).
   double cellLogLikelihood(const Eigen::Vector3d& p_map) const;
 
