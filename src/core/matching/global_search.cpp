@@ -376,10 +376,7 @@ GlobalSearchOutcome globalBranchAndBound(const SearchProblem& problem,
     // The queues score disjoint subtrees of distinct roots: every key appears once.
     std::vector<SearchOutcome::IntervalBound>& all = out.best.interval_bounds;
     for (const QueueResult& r : results) all.insert(all.end(), r.bounds.begin(), r.bounds.end());
-    std::sort(all.begin(), all.end(),
-              [](const SearchOutcome::IntervalBound& a, const SearchOutcome::IntervalBound& b) {
-                return a.key < b.key;
-              });
+    search_detail::sortByKey(all);
     return out;
   }
   // Budget reached or cancelled (or, were a bound not admissible, nothing left): the prior, not

@@ -256,10 +256,7 @@ SearchOutcome branchAndBoundSearch(const SearchProblem& problem,
   for (std::vector<SearchOutcome::Branched>& g : group_branched) {
     out.branched.insert(out.branched.end(), g.begin(), g.end());
   }
-  std::sort(out.branched.begin(), out.branched.end(),
-            [](const SearchOutcome::Branched& a, const SearchOutcome::Branched& b) {
-              return a.key < b.key;
-            });
+  search_detail::sortByKey(out.branched);
   return out;
 }
 

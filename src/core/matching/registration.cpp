@@ -168,8 +168,7 @@ RegistrationResult<MatchResult> Registration::match(const ChunkMap& map,
   }
   const double t1 = tick();
   bool complete = true, cancelled = false;
-  const SearchOutcome best =
-      search(prepared->problem, traversal, &complete, request.cancel, &cancelled);
+  SearchOutcome best = search(prepared->problem, traversal, &complete, request.cancel, &cancelled);
   if (timing) {
     timing->filter_s = t1 - t0;
     timing->search_s = tick() - t1;
@@ -187,7 +186,8 @@ RegistrationResult<MatchResult> Registration::match(const ChunkMap& map,
             " node scores before proving an optimum (window of " +
             std::to_string(prepared->problem.window().poses()) + " poses)");
   }
-  return finish(map, base_points, request, std::move(prepared.value()), best, now, timing);
+  return finish(map, base_points, request, std::move(prepared.value()), std::move(best), now,
+                timing);
 }
 
 SearchOutcome Registration::search(const SearchProblem& problem,
@@ -207,19 +207,23 @@ SearchOutcome Registration::search(const SearchProblem& problem,
   return branchAndBoundSearch(problem, options_.branch_and_bound, traversal, pool_.get());
 }
 
-RegistrationResult<MatchResult> Registration::finish(
-    const ChunkMap& map, const PointList& base_points, const MatchRequest& request,
-    PreparedSearch prepared, const SearchOutcome& search, const std::function<double()>& now,
-    RegistrationTiming* timing) const {
+RegistrationResult<MatchResult> Registration::finish(const ChunkMap& map,
+                                                     const PointList& base_points,
+                                                     const MatchRequest& request,
+                                                     PreparedSearch prepared, SearchOutcome search,
+                                                     const std::function<double()>& now,
+                                                     RegistrationTiming* timing) const {
   if (searchesGlobally(prepared.problem.window())) {
-    return finishGlobal(map, base_points, request, std::move(prepared), search, now, timing);
+    return finishGlobal(map, base_points, request, std::move(prepared), std::move(search), now,
+                        timing);
   }
-  return finishLocal(map, base_points, request, std::move(prepared), search, now, timing);
+  return finishLocal(map, base_points, request, std::move(prepared), std::move(search), now,
+                     timing);
 }
 
 RegistrationResult<MatchResult> Registration::finishGlobal(
     const ChunkMap& map, const PointList& base_points, const MatchRequest& request,
-    PreparedSearch prepared, const SearchOutcome& search, const std::function<double()>& now,
+    PreparedSearch prepared, SearchOutcome search, const std::function<double()>& now,
     RegistrationTiming* timing) const {
   using R = RegistrationResult<MatchResult>;
   auto tick = [&]() { return now ? now() : 0.0; };
@@ -247,10 +251,10 @@ RegistrationResult<MatchResult> Registration::finishGlobal(
   confirm.half_heading_rad = options_.global.confirm_half_heading_rad;
   auto local = prepare(map, base_points, confirm);
   if (!local.ok()) return R::failure(local.errorKind(), "confirming search: " + local.error());
-  const SearchOutcome confirm_search = this->search(local->problem, nullptr);
+  SearchOutcome confirm_search = this->search(local->problem, nullptr);
   const double t2 = tick();
-  auto r =
-      finishLocal(map, base_points, confirm, std::move(local.value()), confirm_search, now, timing);
+  auto r = finishLocal(map, base_points, confirm, std::move(local.value()),
+                       std::move(confirm_search), now, timing);
   if (!r.ok()) return r;
   if (timing) {
     timing->search_s += t2 - t1;
@@ -258,9 +262,9 @@ RegistrationResult<MatchResult> Registration::finishGlobal(
   }
   MatchResult& out = r.value();
   out.global = true;
-  out.confirm_search = out.search;
+  out.confirm_search = std::move(out.search);
   out.global_certificate = global_certificate;
-  out.search = search;
+  out.search = std::move(search);
   out.search.dropCertificateMemos();
   out.search.stats.evaluations += out.confirm_search.stats.evaluations;
   MatchCertificate& c = out.certificate;
@@ -273,7 +277,7 @@ RegistrationResult<MatchResult> Registration::finishGlobal(
   // optimum, which lies a cell's diagonal and a heading step from the grid (as for the
   // confirming search), and the published pose this far from it.
   const Protection global =
-      protectionOf(global_certificate, search.pose, out.pose, map.geometry().resolution_m,
+      protectionOf(global_certificate, out.search.pose, out.pose, map.geometry().resolution_m,
                    prepared.problem.window().heading_step_rad);
   out.protection_xy_m = std::max(out.protection_xy_m, global.xy_m);
   out.protection_heading_rad = std::max(out.protection_heading_rad, global.heading_rad);
@@ -282,13 +286,13 @@ RegistrationResult<MatchResult> Registration::finishGlobal(
 
 RegistrationResult<MatchResult> Registration::finishLocal(
     const ChunkMap& map, const PointList& base_points, const MatchRequest& request,
-    PreparedSearch prepared, const SearchOutcome& search, const std::function<double()>& now,
+    PreparedSearch prepared, SearchOutcome search, const std::function<double()>& now,
     RegistrationTiming* timing) const {
   using R = RegistrationResult<MatchResult>;
   auto tick = [&]() { return now ? now() : 0.0; };
   const double t2 = tick();
   MatchResult out;
-  out.search = search;
+  out.search = std::move(search);
   out.z_offset_m = prepared.z_offset_m;
   out.filtered = std::move(prepared.filtered);
   const FilteredScan& f = out.filtered;

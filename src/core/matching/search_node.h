@@ -3,7 +3,9 @@
 // heading, the first translation of its block, its layer and its bound, and the heap order both
 // searches pop nodes in. Private to the matching stage.
 
+#include <algorithm>
 #include <cstdint>
+#include <vector>
 
 #include "gmm_localization/core/matching/grid_search.h"
 
@@ -32,6 +34,14 @@ struct Lower {
     return keyLess(b.heading_index, b.ty, b.tx, a.heading_index, a.ty, a.tx);
   }
 };
+
+/// Orders the records a search keeps for the certificates (SearchOutcome::branched,
+/// interval_bounds) by key, as SearchOutcome's lookups expect them.
+template <typename Record>
+void sortByKey(std::vector<Record>& records) {
+  std::sort(records.begin(), records.end(),
+            [](const Record& a, const Record& b) { return a.key < b.key; });
+}
 
 /// The outcome for leaf (j, tx, ty) with quantized score `score`: its pose and log-likelihood.
 SearchOutcome makeOutcome(const SearchProblem& problem, int j, int tx, int ty, int64_t score,

@@ -206,21 +206,22 @@ class Registration {
   /// Refinement, covariance, certificate, coverage check and obstacles after a search of
   /// `prepared`; after a global search, first its certificate and the confirming search
   /// (MatchResult::global).
+  /// `search` is taken by value: moved in, what it kept for the certificates is freed once they
+  /// are proved, without a copy.
   RegistrationResult<MatchResult> finish(const ChunkMap& map, const PointList& base_points,
                                          const MatchRequest& request, PreparedSearch prepared,
-                                         const SearchOutcome& search,
-                                         const std::function<double()>& now,
+                                         SearchOutcome search, const std::function<double()>& now,
                                          RegistrationTiming* timing) const;
 
  private:
   RegistrationResult<MatchResult> finishLocal(const ChunkMap& map, const PointList& base_points,
                                               const MatchRequest& request, PreparedSearch prepared,
-                                              const SearchOutcome& search,
+                                              SearchOutcome search,
                                               const std::function<double()>& now,
                                               RegistrationTiming* timing) const;
   RegistrationResult<MatchResult> finishGlobal(const ChunkMap& map, const PointList& base_points,
                                                const MatchRequest& request, PreparedSearch prepared,
-                                               const SearchOutcome& search,
+                                               SearchOutcome search,
                                                const std::function<double()>& now,
                                                RegistrationTiming* timing) const;
 
