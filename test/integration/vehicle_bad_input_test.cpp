@@ -39,7 +39,6 @@ namespace {
 using namespace vehicle_test;  // NOLINT: test code
 namespace fs = std::filesystem;
 
-constexpr double kTolXyM = 0.3, kTolYawRad = 1.0 * M_PI / 180.0;
 const char* kEkfFilter = "/localization/ekf: filter";
 const char* kMatcherDiag = "/localization/matcher: scan matching";
 

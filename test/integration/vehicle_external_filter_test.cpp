@@ -41,7 +41,6 @@ using namespace vehicle_test;  // NOLINT: test code
 
 const char* kManager = "/localization/localization_manager";
 const char* kPositionDiag = "/localization/map_server: vehicle position";
-constexpr double kTolXyM = 0.3, kTolYawRad = 1.0 * M_PI / 180.0;
 constexpr double kPlayS = 14.0;  ///< bag seconds played (of 20): keeps the test near 25 s
 
 std::string mode;  ///< "no_ekf" or "ekf_no_tf"

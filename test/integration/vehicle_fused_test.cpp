@@ -25,9 +25,6 @@ namespace {
 
 using namespace vehicle_test;  // NOLINT: test code
 
-constexpr double kTolXyM = 0.3;
-constexpr double kTolYawRad = 1.0 * M_PI / 180.0;
-
 std::unique_ptr<Outputs> outputs;
 
 bool serverReady(const std::string& server) {

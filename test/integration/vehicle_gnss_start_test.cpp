@@ -35,7 +35,6 @@ using namespace vehicle_test;  // NOLINT: test code
 
 constexpr double kBiasEastM = 1.2, kBiasNorthM = -0.9, kReportedSigmaM = 1.5;
 constexpr double kHeadingErrorRad = 1.5 * M_PI / 180.0;
-constexpr double kTolXyM = 0.3, kTolYawRad = 1.0 * M_PI / 180.0;
 const char* kGnssDiag = "/localization/gnss_initializer: GNSS initializer";
 
 std::unique_ptr<Outputs> outputs;

@@ -47,7 +47,6 @@ using namespace vehicle_test;  // NOLINT: test code
 const char* kManager = "/localization/localization_manager";
 const char* kAdapterDiag = "/localization/ins_adapter: INS adapter";
 const char* kChild = "POS_REF";
-constexpr double kTolXyM = 0.3, kTolYawRad = 1.0 * M_PI / 180.0;
 constexpr double kPlayS = 14.0;  ///< bag seconds played (of 20): keeps the test near 25 s
 
 std::string driver_topic;  ///< the driver's odometry topic (odom_topic of the launch)

@@ -43,7 +43,6 @@ constexpr double kAnswerMeanwhileWithinMs = 1000.0;
 // status was published on (delivery and the next IMU step) [s].
 constexpr double kHearS = 0.05;
 constexpr double kTrackAfterS = 4.0;  ///< bag time played after the relocalization budget
-constexpr double kTolXyM = 0.3, kTolYawRad = 1.0 * M_PI / 180.0;
 
 TEST(VehicleKidnap, DetectedAndRelocalizedWithoutAPersonAndNothingWrongReportedAsGood) {
   ros::NodeHandle nh;

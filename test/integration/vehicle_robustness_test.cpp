@@ -30,7 +30,6 @@ constexpr double kImuFrom = 3.0, kImuTo = 5.5;
 constexpr double kInsFrom = 7.0, kInsTo = 9.5;
 constexpr double kTfFrom = 10.5, kTfTo = 11.5;
 constexpr double kGlobalAt = 12.5, kOffMapAt = 15.5, kBackAt = 17.5;
-constexpr double kTolXyM = 0.3, kTolYawRad = 1.0 * M_PI / 180.0;
 const char* kEkfInputs = "/localization/ekf: inputs";
 const char* kMatcherDiag = "/localization/matcher: scan matching";
 const char* kPositionDiag = "/localization/map_server: vehicle position";

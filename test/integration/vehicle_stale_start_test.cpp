@@ -27,9 +27,6 @@ namespace {
 
 using namespace vehicle_test;  // NOLINT: test code
 
-constexpr double kTolXyM = 0.3;
-constexpr double kTolYawRad = 1.0 * M_PI / 180.0;
-
 TEST(VehicleStaleStart, FindsTheVehicleByItselfAndReportsNothingWrongAsGood) {
   ros::NodeHandle nh;
   Outputs outputs(nh, /*subscribe_truth=*/true);

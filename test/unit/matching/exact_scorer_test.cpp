@@ -16,7 +16,28 @@
 namespace gmm_localization {
 namespace {
 
-using ExactScorerTest = testing::StreetFixture;
+/// A street scan of 1,500 points seen from a random street pose, and a scorer around it.
+struct StreetCase {
+  Pose6 truth;
+  PointList scan;
+  ExactScorer scorer;
+};
+
+class ExactScorerTest : public testing::StreetFixture {
+ protected:
+  static StreetCase streetCase(std::mt19937& rng, int noise_seed) {
+    const Pose6 truth = world_->streetPose(rng);
+    return {truth, thinEvenly(world_->scan(truth, 35.0, 0.25, 0.0, noise_seed), 1500),
+            ExactScorer(*chunks_, -6.0, truth.x, truth.y, 60.0)};
+  }
+};
+
+/// The same six coordinates, bit for bit.
+void expectSamePose(const Pose6& a, const Pose6& b, int c) {
+  const double Pose6::*coordinates[6] = {&Pose6::x,    &Pose6::y,     &Pose6::z,
+                                         &Pose6::roll, &Pose6::pitch, &Pose6::yaw};
+  for (int k = 0; k < 6; ++k) EXPECT_EQ(a.*coordinates[k], b.*coordinates[k]) << "case " << c;
+}
 
 /// Share of points whose block and height are those of `before` (the points reusable).
 double sameKeys(const std::vector<CellBlockMemo>& a, const std::vector<CellBlockMemo>& b) {
@@ -31,10 +52,10 @@ TEST_F(ExactScorerTest, ReusingTheCellsOfTheLastPoseChangesNoBit) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   for (int c = 0; c < 10; ++c) {
-    const Pose6 truth = world_->streetPose(rng);
-    const PointList scan = thinEvenly(world_->scan(truth, 35.0, 0.25, 0.0, 300 + c), 1500);
-    const ExactScorer scorer(*chunks_, -6.0, truth.x, truth.y, 60.0);
-    Pose6 pose = truth;
+    const StreetCase k = streetCase(rng, 300 + c);
+    const PointList& scan = k.scan;
+    const ExactScorer& scorer = k.scorer;
+    Pose6 pose = k.truth;
     pose.x += 0.1 * u(rng);
     pose.yaw += 0.01 * u(rng);
     pose.roll = 0.01 * u(rng);
@@ -74,10 +95,10 @@ TEST_F(ExactScorerTest, ASecondMemoOfTheSameStepServesTheStepsThatMoveEveryHeigh
   std::mt19937 rng(9);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   for (int c = 0; c < 6; ++c) {
-    const Pose6 truth = world_->streetPose(rng);
-    const PointList scan = thinEvenly(world_->scan(truth, 35.0, 0.25, 0.0, 400 + c), 1500);
-    const ExactScorer scorer(*chunks_, -6.0, truth.x, truth.y, 60.0);
-    Pose6 pose = truth;
+    const StreetCase k = streetCase(rng, 400 + c);
+    const PointList& scan = k.scan;
+    const ExactScorer& scorer = k.scorer;
+    Pose6 pose = k.truth;
     pose.x += 0.1 * u(rng);
     pose.roll = 0.01 * u(rng);
     const double step = c % 2 == 0 ? 0.01 : -0.02;
@@ -113,10 +134,10 @@ TEST_F(ExactScorerTest, TheClimbWithItsMemosTakesThePathOfOneThatScoresEveryPose
   std::mt19937 rng(21);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   for (int c = 0; c < 4; ++c) {
-    const Pose6 truth = world_->streetPose(rng);
-    const PointList scan = thinEvenly(world_->scan(truth, 35.0, 0.25, 0.0, 500 + c), 1500);
-    const ExactScorer scorer(*chunks_, -6.0, truth.x, truth.y, 60.0);
-    Pose6 start = truth;
+    const StreetCase k = streetCase(rng, 500 + c);
+    const PointList& scan = k.scan;
+    const ExactScorer& scorer = k.scorer;
+    Pose6 start = k.truth;
     start.x += 0.12 * u(rng);
     start.y += 0.12 * u(rng);
     start.z += 0.1 * u(rng);
@@ -138,12 +159,7 @@ TEST_F(ExactScorerTest, TheClimbWithItsMemosTakesThePathOfOneThatScoresEveryPose
       const HillClimbOutcome plain = hillClimb(afresh, start, o);
       EXPECT_EQ(memo.evaluations, plain.evaluations) << "case " << c;
       EXPECT_EQ(memo.score, plain.score) << "case " << c;
-      EXPECT_EQ(memo.pose.x, plain.pose.x);
-      EXPECT_EQ(memo.pose.y, plain.pose.y);
-      EXPECT_EQ(memo.pose.z, plain.pose.z);
-      EXPECT_EQ(memo.pose.roll, plain.pose.roll);
-      EXPECT_EQ(memo.pose.pitch, plain.pose.pitch);
-      EXPECT_EQ(memo.pose.yaw, plain.pose.yaw);
+      expectSamePose(memo.pose, plain.pose, c);
       EXPECT_GE(memo.score, memo.score_start);
       EXPECT_GT(memo.evaluations, 20) << "case " << c;  // a climb, not a stop at the start
     }

@@ -210,11 +210,19 @@ TEST(GlobalSearch, LeafBoundIsTheExactScore) {
   }
 }
 
+/// The small full-turn case the budget and cancel tests stop early: chunks, window, problem.
+struct StoppedCase {
+  ChunkMap chunks = testing::smallRandomChunks(9, 0.3);
+  std::mt19937 rng{8};
+  SearchWindow w = fullTurnWindow(rng, 6.0);
+  Result<SearchProblem> problem =
+      SearchProblem::create(chunks, testing::randomPoints(rng, 150, 5.0), w);
+};
+
 TEST(GlobalSearch, BudgetStopsWithoutClaimingAnOptimum) {
-  const ChunkMap chunks = testing::smallRandomChunks(9, 0.3);
-  std::mt19937 rng(8);
-  const SearchWindow w = fullTurnWindow(rng, 6.0);
-  auto problem = SearchProblem::create(chunks, testing::randomPoints(rng, 150, 5.0), w);
+  StoppedCase k;
+  const SearchWindow& w = k.w;
+  auto& problem = k.problem;
   ASSERT_TRUE(problem.ok()) << problem.error();
   GlobalSearchOptions go;
   go.max_evaluations = 5;
@@ -227,10 +235,9 @@ TEST(GlobalSearch, BudgetStopsWithoutClaimingAnOptimum) {
 }
 
 TEST(GlobalSearch, ACancelFlagStopsItAsItsBudgetWouldAndSaysSo) {
-  const ChunkMap chunks = testing::smallRandomChunks(9, 0.3);
-  std::mt19937 rng(8);
-  const SearchWindow w = fullTurnWindow(rng, 6.0);
-  auto problem = SearchProblem::create(chunks, testing::randomPoints(rng, 150, 5.0), w);
+  StoppedCase k;
+  const SearchWindow& w = k.w;
+  auto& problem = k.problem;
   ASSERT_TRUE(problem.ok()) << problem.error();
   const GlobalSearchOutcome full = globalBranchAndBound(problem.value());
   ASSERT_TRUE(full.complete);
