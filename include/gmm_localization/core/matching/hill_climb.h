@@ -65,7 +65,8 @@ HillClimbOutcome hillClimb(const ClimbObjective& objective, const Pose6& start,
 /// pose) within the box around `start`, coarse-to-fine (options.coarse_points). Deterministic;
 /// never returns a worse pose than start (scored on all points). `pool`: each score's point
 /// blocks in parallel (the same result, bit for bit). The poses are scored by
-/// ExactScorer::scoreReusing, each reusing the cells of the pose the climb stands on.
+/// ExactScorer::scoreReusing, each reusing the cells of the pose the climb stands on and of its
+/// last trial one step the same way (same path, pose and score as scoring every pose afresh).
 HillClimbOutcome hillClimb(const ExactScorer& scorer, const PointList& base_points,
                            const Pose6& start, const HillClimbOptions& options,
                            TaskPool* pool = nullptr);
