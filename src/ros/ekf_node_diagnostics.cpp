@@ -42,6 +42,11 @@ void EkfNode::setupDiagnostics() {
       s.add("gnss fixes received / refused",
             std::to_string(gnss_fixes_) + " / " + std::to_string(filter_->gnssRefused()));
       s.add("gnss map georeference", georeference_text_);
+      if (std::isfinite(d.gnss_bias_sigma_m)) {
+        s.add("gnss receiver bias x, y [m] (sigma)", fixed(d.gnss_bias_m.x(), 2) + ", " +
+                                                         fixed(d.gnss_bias_m.y(), 2) + " (" +
+                                                         fixed(d.gnss_bias_sigma_m, 2) + ")");
+      }
       if (!gnss_last_problem_.empty()) s.add("gnss last problem", gnss_last_problem_);
     }
     s.add("delayed measurements", d.delayed_measurements);

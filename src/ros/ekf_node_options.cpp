@@ -8,22 +8,24 @@ namespace gmm_localization {
 namespace node {
 namespace {
 
-// A list of kStateSize values, or of the kStateSize - 1 kinematic ones (the lists before the
-// twist scale joined the state): the twist scale then keeps its default.
-std::array<double, kStateSize> perState(const ParamSource& nh, const std::string& key,
-                                        const std::array<double, kStateSize>& defaults) {
+// A list of kTunedStateCount values, or of the kTunedStateCount - 1 kinematic ones (the lists
+// before the twist scale joined the state): the twist scale then keeps its default. The GNSS
+// bias has no entry (gnss_bias_sigma_m, gnss_bias_tau_s).
+std::array<double, kTunedStateCount> perState(
+    const ParamSource& nh, const std::string& key,
+    const std::array<double, kTunedStateCount>& defaults) {
   if (!nh.hasParam(key)) return defaults;
   const std::vector<double> v =
       param<std::vector<double>>(nh, key, std::vector<double>(defaults.begin(), defaults.end()));
-  if (v.size() != static_cast<size_t>(kStateSize) &&
+  if (v.size() != static_cast<size_t>(kTunedStateCount) &&
       v.size() != static_cast<size_t>(kStateTwistScale)) {
     throw ConfigError("parameter " + nh.resolveName(key) + " must list " +
-                      std::to_string(kStateSize) +
+                      std::to_string(kTunedStateCount) +
                       " values (x y z roll pitch yaw vx vy vz wx "
                       "wy wz ax ay az twist_scale; without twist_scale: the default), it has " +
                       std::to_string(v.size()));
   }
-  std::array<double, kStateSize> out = defaults;
+  std::array<double, kTunedStateCount> out = defaults;
   std::copy(v.begin(), v.end(), out.begin());
   return out;
 }
@@ -64,6 +66,9 @@ EkfOptions loadEkfOptions(const ParamSource& nh) {
   o.twist_use_linear = param(nh, "twist_use_linear", o.twist_use_linear);
   o.twist_use_angular = param(nh, "twist_use_angular", o.twist_use_angular);
   o.estimate_twist_scale = param(nh, "estimate_twist_scale", o.estimate_twist_scale);
+  o.estimate_gnss_bias = param(nh, "estimate_gnss_bias", o.estimate_gnss_bias);
+  o.gnss_bias_sigma_m = param(nh, "gnss_bias_sigma_m", o.gnss_bias_sigma_m);
+  o.gnss_bias_tau_s = param(nh, "gnss_bias_tau_s", o.gnss_bias_tau_s);
   const Status valid = o.validate();
   if (!valid) throw ConfigError(valid.error());
   return o;

@@ -82,7 +82,11 @@ Result<EkfState> Ekf::validatedPoseState(const Eigen::Isometry3d& map_T_base,
   s.x.setZero();
   setPoseInState(map_T_base, &s.x);
   s.P = StateCovariance::Zero();
-  for (int i = 0; i < kStateSize; ++i) s.P(i, i) = options_.initial_variance[i];
+  for (int i = 0; i < kTunedStateCount; ++i) s.P(i, i) = options_.initial_variance[i];
+  // The GNSS bias starts at 0 with its stationary variance (a receiver on for a while).
+  const double bias_var = options_.gnss_bias_sigma_m * options_.gnss_bias_sigma_m;
+  s.P(kStateGnssBiasX, kStateGnssBiasX) = bias_var;
+  s.P(kStateGnssBiasY, kStateGnssBiasY) = bias_var;
   s.P.topLeftCorner<6, 6>() = m->R;  // symmetrised, floored
   return s;
 }
@@ -110,7 +114,7 @@ Status Ekf::setPose(const Eigen::Isometry3d& map_T_base, const Matrix6d& pose_co
   if (!pose) return Status::failure(pose.error());
   EkfState s = latest;
   predictState(&s, std::max(time_s, latest.time_s), options_.process_noise_density,
-               options_.max_prediction_step_s);
+               options_.max_prediction_step_s, gnssBiasProcess());
   s.x.head<6>() = pose->x.head<6>();
   s.P.topRows<6>().setZero();
   s.P.leftCols<6>().setZero();
@@ -120,6 +124,11 @@ Status Ekf::setPose(const Eigen::Isometry3d& map_T_base, const Matrix6d& pose_co
   diagnostics_.consecutive_stale = 0;
   for (SourceCounters& c : diagnostics_.sources) c.consecutive_gate_rejections = 0;
   return Status::success();
+}
+
+GnssBiasProcess Ekf::gnssBiasProcess() const {
+  if (!options_.estimate_gnss_bias) return {};
+  return {options_.gnss_bias_sigma_m, options_.gnss_bias_tau_s};
 }
 
 double Ekf::time() const {
@@ -265,7 +274,8 @@ FuseReport Ekf::process(const Result<EkfMeasurement>& m, MeasurementSource sourc
 
 FuseReport Ekf::fuseAfter(const EkfMeasurement& m, const EkfState& from) {
   EkfState s = from;
-  predictState(&s, m.stamp_s, options_.process_noise_density, options_.max_prediction_step_s);
+  predictState(&s, m.stamp_s, options_.process_noise_density, options_.max_prediction_step_s,
+               gnssBiasProcess());
   FuseReport report;
   report.source = m.source;
   report.stamp_s = m.stamp_s;
@@ -334,7 +344,8 @@ Result<EkfState> Ekf::stateAt(double time_s) const {
         ", older than the stored history");
   }
   EkfState s = *from;
-  predictState(&s, time_s, options_.process_noise_density, options_.max_prediction_step_s);
+  predictState(&s, time_s, options_.process_noise_density, options_.max_prediction_step_s,
+               gnssBiasProcess());
   return s;
 }
 
@@ -350,6 +361,11 @@ EkfDiagnostics Ekf::diagnostics() const {
   d.yaw_sigma_rad = std::sqrt(s.P(kStateYaw, kStateYaw));
   d.twist_scale = s.twistScale();
   d.twist_scale_sigma = std::sqrt(s.P(kStateTwistScale, kStateTwistScale));
+  if (options_.estimate_gnss_bias) {
+    d.gnss_bias_m = s.gnssBias();
+    d.gnss_bias_sigma_m =
+        largestSigma(Eigen::Matrix2d(s.P.block<2, 2>(kStateGnssBiasX, kStateGnssBiasX)));
+  }
   return d;
 }
 

@@ -204,8 +204,10 @@ Result<EkfMeasurement> makePositionMeasurement(const PositionMeasurement& m,
                                                const EkfOptions& options) {
   const int n = m.use_z ? 3 : 2;
   std::array<int, kMaxMeasurementSize> indices{kStateX, kStateY, kStateZ};
-  return assemble(MeasurementSource::kGnssPosition, MeasurementModel::kDirect, m.stamp_s, indices,
-                  m.position_m.head(n), m.covariance.topLeftCorner(n, n), options);
+  const MeasurementModel model =
+      options.estimate_gnss_bias ? MeasurementModel::kBiasedPosition : MeasurementModel::kDirect;
+  return assemble(MeasurementSource::kGnssPosition, model, m.stamp_s, indices, m.position_m.head(n),
+                  m.covariance.topLeftCorner(n, n), options);
 }
 
 Result<EkfMeasurement> makeTwistMeasurement(const TwistMeasurement& m, const EkfOptions& options) {
@@ -304,6 +306,16 @@ void evaluateMeasurement(const EkfMeasurement& m, const StateVector& x, double g
       (*h)(i) = gain * x(k);
       (*jacobian)(i, k) = gain;
       (*jacobian)(i, kStateTwistScale) = x(k);
+    }
+  }
+  if (m.model == MeasurementModel::kBiasedPosition) {
+    // A fix reads the position plus the receiver's bias, horizontally (ekf_state.h).
+    for (int i = 0; i < m.size; ++i) {
+      const int k = m.indices[i];
+      if (k != kStateX && k != kStateY) continue;
+      const int b = k == kStateX ? kStateGnssBiasX : kStateGnssBiasY;
+      (*h)(i) += x(b);
+      (*jacobian)(i, b) = 1.0;
     }
   }
   if (m.model == MeasurementModel::kAccelerationMinusGravity) {

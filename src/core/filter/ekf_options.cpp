@@ -19,9 +19,9 @@ bool inRange(const char* key, double value, double lo, double hi, bool lo_open, 
   return ok;
 }
 
-bool perStateValid(const char* key, const std::array<double, kStateSize>& values, bool positive,
-                   std::string* why) {
-  for (int i = 0; i < kStateSize; ++i) {
+bool perStateValid(const char* key, const std::array<double, kTunedStateCount>& values,
+                   bool positive, std::string* why) {
+  for (int i = 0; i < kTunedStateCount; ++i) {
     const double v = values[i];
     if (std::isfinite(v) && (positive ? v > 0.0 : v >= 0.0)) continue;
     std::ostringstream s;
@@ -54,7 +54,9 @@ Status EkfOptions::validate() const {
       inRange("pose_gate_probability", pose_gate_probability, 0.0, 1.0, true, &why) &&
       inRange("twist_gate_probability", twist_gate_probability, 0.0, 1.0, true, &why) &&
       inRange("imu_gate_probability", imu_gate_probability, 0.0, 1.0, true, &why) &&
-      inRange("gnss_gate_probability", gnss_gate_probability, 0.0, 1.0, true, &why);
+      inRange("gnss_gate_probability", gnss_gate_probability, 0.0, 1.0, true, &why) &&
+      inRange("gnss_bias_sigma_m", gnss_bias_sigma_m, 0.0, 100.0, true, &why) &&
+      inRange("gnss_bias_tau_s", gnss_bias_tau_s, 0.0, 1e6, true, &why);
   if (!ok) return Status::failure(why);
   if (imu_gravity_removal != GravityRemoval::kStateEstimate &&
       imu_gravity_removal != GravityRemoval::kMeasuredOrientation) {

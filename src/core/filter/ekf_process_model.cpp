@@ -70,17 +70,31 @@ StateVector predictStep(const StateVector& x, double dt, StateCovariance* jacobi
 }
 
 void predictState(EkfState* state, double time_s,
-                  const std::array<double, kStateSize>& process_noise_density, double max_step_s) {
+                  const std::array<double, kTunedStateCount>& process_noise_density,
+                  double max_step_s, const GnssBiasProcess& gnss_bias) {
   double remaining = time_s - state->time_s;
   if (!(remaining > 0.0)) return;
   const int steps = std::max(1, static_cast<int>(std::ceil(remaining / max_step_s)));
   const double dt = remaining / steps;
-  const Eigen::Map<const StateVector> q(process_noise_density.data());
+  StateVector q = StateVector::Zero();
+  q.head<kTunedStateCount>() =
+      Eigen::Map<const Eigen::Matrix<double, kTunedStateCount, 1>>(process_noise_density.data());
+  // The bias's exact discrete Gauss-Markov step (ekf_process_model.h).
+  const bool bias_moves = gnss_bias.tau_s > 0.0;
+  const double decay = bias_moves ? std::exp(-dt / gnss_bias.tau_s) : 1.0;
+  const double bias_var =
+      bias_moves ? (1.0 - decay * decay) * gnss_bias.sigma_m * gnss_bias.sigma_m : 0.0;
   StateCovariance f;
   for (int k = 0; k < steps; ++k) {
     state->x = predictStep(state->x, dt, &f);
+    for (int i = kStateGnssBiasX; i <= kStateGnssBiasY; ++i) {
+      state->x(i) *= decay;
+      f(i, i) = decay;
+    }
     state->P = f * state->P * f.transpose();
     state->P.diagonal() += q * dt;
+    state->P(kStateGnssBiasX, kStateGnssBiasX) += bias_var;
+    state->P(kStateGnssBiasY, kStateGnssBiasY) += bias_var;
   }
   state->P = 0.5 * (state->P + state->P.transpose()).eval();
   state->time_s = time_s;

@@ -6,9 +6,9 @@
 namespace gmm_localization {
 
 const char* stateName(int index) {
-  static const char* const kNames[kStateSize] = {"x",  "y",  "z",  "roll",       "pitch", "yaw",
-                                                 "vx", "vy", "vz", "wx",         "wy",    "wz",
-                                                 "ax", "ay", "az", "twist_scale"};
+  static const char* const kNames[kStateSize] = {
+      "x",  "y",  "z",  "roll", "pitch", "yaw", "vx",          "vy",          "vz",
+      "wx", "wy", "wz", "ax",   "ay",    "az",  "twist_scale", "gnss_bias_x", "gnss_bias_y"};
   return index >= 0 && index < kStateSize ? kNames[index] : "?";
 }
 

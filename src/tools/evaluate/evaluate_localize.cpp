@@ -151,6 +151,8 @@ class BagRun {
       row.sigma_y_m = std::sqrt(std::max(0.0, cov(1, 1)));
       row.sigma_yaw_rad = std::sqrt(std::max(0.0, cov(5, 5)));
       row.twist_scale = state->twistScale();
+      row.gnss_bias_x_m = state->gnssBias().x();
+      row.gnss_bias_y_m = state->gnssBias().y();
       out_.ekf.push_back(row);
     }
   }

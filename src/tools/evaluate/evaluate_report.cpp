@@ -51,13 +51,14 @@ void writeEkf(const std::vector<EkfRow>& rows, const std::string& path) {
   std::ofstream f = openFile(path);
   f << "t,x,y,z,yaw,gt_x,gt_y,gt_z,gt_yaw,longitudinal_m,lateral_m,yaw_err_rad,sigma_x_m,"
        "sigma_y_m,sigma_yaw_rad,"
-    << kMapFrameHeader << ",twist_scale\n";
+    << kMapFrameHeader << ",twist_scale,gnss_bias_x_m,gnss_bias_y_m\n";
   for (const EkfRow& r : rows) {
     f << r.t << ',' << r.estimate.x << ',' << r.estimate.y << ',' << r.estimate.z << ','
       << r.estimate.yaw << ',' << r.truth.x << ',' << r.truth.y << ',' << r.truth.z << ','
       << r.truth.yaw << ',' << r.error.longitudinal_m << ',' << r.error.lateral_m << ','
       << r.error.yaw_rad << ',' << r.sigma_x_m << ',' << r.sigma_y_m << ',' << r.sigma_yaw_rad
-      << ',' << mapFrameColumns(r.map_frame) << ',' << r.twist_scale << '\n';
+      << ',' << mapFrameColumns(r.map_frame) << ',' << r.twist_scale << ',' << r.gnss_bias_x_m
+      << ',' << r.gnss_bias_y_m << '\n';
   }
 }
 

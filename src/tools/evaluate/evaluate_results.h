@@ -33,6 +33,9 @@ struct EkfRow {
   MapFrameErrors map_frame;
   /// The EKF's INS twist scale s (twist = (1 + s) v); NaN when unknown (a recording).
   double twist_scale = std::numeric_limits<double>::quiet_NaN();
+  /// The EKF's GNSS receiver bias estimate, map frame [m] (NaN in mode B).
+  double gnss_bias_x_m = std::numeric_limits<double>::quiet_NaN();
+  double gnss_bias_y_m = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// A registration's certificate and the truth's score deficit (docs/integrity.md).

@@ -34,6 +34,17 @@ MeasurementJacobian numericJacobian(const EkfMeasurement& m, const StateVector& 
   return numeric;
 }
 
+/// Expects the analytic Jacobian `jac` of m at x to match the numeric one in every entry.
+void expectJacobianMatchesNumeric(const EkfMeasurement& m, const StateVector& x, double g,
+                                  const MeasurementJacobian& jac) {
+  const MeasurementJacobian numeric = numericJacobian(m, x, g);
+  for (int j = 0; j < kStateSize; ++j) {
+    for (int i = 0; i < m.size; ++i) {
+      EXPECT_NEAR(jac(i, j), numeric(i, j), 1e-6) << "d h" << i << " / d " << stateName(j);
+    }
+  }
+}
+
 TEST(EkfMeasurement, PlanarPoseSelectsXYYaw) {
   EkfOptions o;
   const auto m = makePoseMeasurement(PoseMeasurement::planar(3.0, 1.0, 2.0, 0.5, planarCov()), o);
@@ -162,12 +173,7 @@ TEST(EkfMeasurement, ScaledTwistModelAndJacobian) {
   EXPECT_NEAR(jac(0, kStateTwistScale), 11.9, 1e-12);
   EXPECT_NEAR(jac(0, kStateVx), 1.004, 1e-12);
   EXPECT_EQ(jac(5, kStateTwistScale), 0.0);
-  const MeasurementJacobian numeric = numericJacobian(*m, x, o.gravity_mps2);
-  for (int j = 0; j < kStateSize; ++j) {
-    for (int i = 0; i < 6; ++i) {
-      EXPECT_NEAR(jac(i, j), numeric(i, j), 1e-6) << "d h" << i << " / d " << stateName(j);
-    }
-  }
+  expectJacobianMatchesNumeric(*m, x, o.gravity_mps2, jac);
   // Off: the direct model, the scale never enters.
   o.estimate_twist_scale = false;
   m = makeTwistMeasurement(t, o);
@@ -176,6 +182,43 @@ TEST(EkfMeasurement, ScaledTwistModelAndJacobian) {
   evaluateMeasurement(*m, x, o.gravity_mps2, &h, &jac);
   EXPECT_DOUBLE_EQ(h(0), 11.9);
   EXPECT_EQ(jac.col(kStateTwistScale).cwiseAbs().maxCoeff(), 0.0);
+}
+
+TEST(EkfMeasurement, BiasedGnssPositionModelAndJacobian) {
+  // A fix reads p + b horizontally and z as is; the Jacobian matches finite differences.
+  EkfOptions o;
+  PositionMeasurement p;
+  p.stamp_s = 3.0;
+  p.position_m << 10.0, -4.0, 2.0;
+  p.covariance = Eigen::Matrix3d::Identity() * 1.5;
+  p.use_z = true;
+  auto m = makePositionMeasurement(p, o);
+  ASSERT_TRUE(m.ok()) << m.error();
+  EXPECT_EQ(m->model, MeasurementModel::kBiasedPosition);
+  ASSERT_EQ(m->size, 3);
+  StateVector x = StateVector::Zero();
+  x.head<3>() << 9.0, -3.5, 1.8;
+  x(kStateGnssBiasX) = 0.7;
+  x(kStateGnssBiasY) = -0.4;
+  MeasurementVector h;
+  MeasurementJacobian jac;
+  evaluateMeasurement(*m, x, o.gravity_mps2, &h, &jac);
+  EXPECT_NEAR(h(0), 9.7, 1e-12);
+  EXPECT_NEAR(h(1), -3.9, 1e-12);
+  EXPECT_NEAR(h(2), 1.8, 1e-12);
+  EXPECT_EQ(jac(0, kStateGnssBiasX), 1.0);
+  EXPECT_EQ(jac(0, kStateGnssBiasY), 0.0);
+  EXPECT_EQ(jac(1, kStateGnssBiasY), 1.0);
+  EXPECT_EQ(jac(2, kStateGnssBiasX), 0.0);
+  expectJacobianMatchesNumeric(*m, x, o.gravity_mps2, jac);
+  // Off: the fix reads the position, the bias never enters.
+  o.estimate_gnss_bias = false;
+  m = makePositionMeasurement(p, o);
+  ASSERT_TRUE(m.ok()) << m.error();
+  EXPECT_EQ(m->model, MeasurementModel::kDirect);
+  evaluateMeasurement(*m, x, o.gravity_mps2, &h, &jac);
+  EXPECT_DOUBLE_EQ(h(0), 9.0);
+  EXPECT_EQ(jac.block(0, kStateGnssBiasX, 3, 2).cwiseAbs().maxCoeff(), 0.0);
 }
 
 TEST(EkfMeasurement, ImuOrientationIgnoresYaw) {
@@ -234,12 +277,7 @@ TEST(EkfMeasurement, GravityRemovalBothWays) {
   evaluateMeasurement(*m, x, o.gravity_mps2, &h, &jac);
   EXPECT_LT((h - imu.linear_acceleration_mps2 - Eigen::Vector3d(0.3, 0, 0)).norm(), 1e-12);
   // Jacobian: identity on a, finite differences on roll and pitch, nothing else.
-  const MeasurementJacobian numeric = numericJacobian(*m, x, o.gravity_mps2);
-  for (int j = 0; j < kStateSize; ++j) {
-    for (int i = 0; i < 3; ++i) {
-      EXPECT_NEAR(jac(i, j), numeric(i, j), 1e-6) << "d h" << i << " / d " << stateName(j);
-    }
-  }
+  expectJacobianMatchesNumeric(*m, x, o.gravity_mps2, jac);
   EXPECT_DOUBLE_EQ(jac(0, kStateAx), 1.0);
   EXPECT_NE(jac(1, kStateRoll), 0.0);
 

@@ -51,8 +51,13 @@ void runOnce(const EkfOptions& o, unsigned seed, std::vector<double>* nees) {
   for (int k = 1; k <= static_cast<int>(duration / dt); ++k) {
     const double t = k * dt;
     x = predictStep(x, dt, nullptr);
-    for (int i = 0; i < kStateSize; ++i)
+    for (int i = 0; i < kTunedStateCount; ++i)
       x(i) += std::sqrt(o.process_noise_density[i] * dt) * n(rng);
+    // The GNSS bias: its Gauss-Markov step (no fixes here: unobserved, it must stay consistent).
+    const double decay = std::exp(-dt / o.gnss_bias_tau_s);
+    for (int i = kStateGnssBiasX; i <= kStateGnssBiasY; ++i) {
+      x(i) = decay * x(i) + std::sqrt(1.0 - decay * decay) * o.gnss_bias_sigma_m * n(rng);
+    }
     for (int i = kStateRoll; i <= kStateYaw; ++i) x(i) = wrapAngle(x(i));
     ImuMeasurement imu;
     imu.stamp_s = t;

@@ -85,7 +85,7 @@ TEST(EkfProcessModel, ConstantTurnFollowsTheCircle) {
   s.x(kStateWz) = 0.2;
   s.x(kStateAy) = 2.0;
   s.P = StateCovariance::Identity() * 1e-4;
-  std::array<double, kStateSize> q{};
+  std::array<double, kTunedStateCount> q{};
   predictState(&s, 5.0, q, 0.001);
   const double yaw = 1.0, radius = 50.0;
   EXPECT_NEAR(s.x(kStateYaw), yaw, 1e-9);
@@ -101,7 +101,7 @@ TEST(EkfProcessModel, StraightAccelerationAndPitchedClimb) {
   s.x(kStatePitch) = -0.1;  // nose up (ZYX pitch about +y tips +x downwards for positive pitch)
   s.x(kStateVx) = 5.0;
   s.x(kStateAx) = 1.0;
-  std::array<double, kStateSize> q{};
+  std::array<double, kTunedStateCount> q{};
   predictState(&s, 2.0, q, 0.01);
   const double distance = 5.0 * 2.0 + 0.5 * 1.0 * 4.0;
   EXPECT_NEAR(s.x(kStateX), distance * std::cos(0.1), 1e-9);
@@ -113,7 +113,7 @@ TEST(EkfProcessModel, CovarianceGrowsByTheSpectralDensityAndStaysSymmetric) {
   EkfState s;
   s.x.setZero();
   s.P = StateCovariance::Identity() * 0.01;
-  std::array<double, kStateSize> q{};
+  std::array<double, kTunedStateCount> q{};
   q.fill(0.0);
   q[kStateAx] = 2.0;
   q[kStateYaw] = 0.5;
@@ -124,6 +124,31 @@ TEST(EkfProcessModel, CovarianceGrowsByTheSpectralDensityAndStaysSymmetric) {
   EXPECT_GT(s.P(kStateVx, kStateVx), 0.01 + 0.5);  // acceleration noise feeds velocity
   EXPECT_EQ((s.P - s.P.transpose()).cwiseAbs().maxCoeff(), 0.0);
   EXPECT_DOUBLE_EQ(s.time_s, 1.0);
+}
+
+TEST(EkfProcessModel, GnssBiasIsAGaussMarkovProcessAtItsStationaryVariance) {
+  EkfState s;
+  s.x.setZero();
+  s.x(kStateGnssBiasX) = 2.0;
+  s.x(kStateGnssBiasY) = -1.0;
+  s.P = StateCovariance::Identity() * 0.01;
+  s.P(kStateGnssBiasX, kStateGnssBiasX) = 1.5 * 1.5;  // at the stationary variance
+  s.P(kStateGnssBiasY, kStateGnssBiasY) = 0.0;        // known exactly at first
+  const std::array<double, kTunedStateCount> q{};
+  const GnssBiasProcess bias{1.5, 60.0};
+  predictState(&s, 30.0, q, 0.02, bias);
+  const double e = std::exp(-0.5);
+  EXPECT_NEAR(s.x(kStateGnssBiasX), 2.0 * e, 1e-9);
+  EXPECT_NEAR(s.x(kStateGnssBiasY), -1.0 * e, 1e-9);
+  EXPECT_NEAR(s.P(kStateGnssBiasX, kStateGnssBiasX), 1.5 * 1.5, 1e-9);  // stays there
+  EXPECT_NEAR(s.P(kStateGnssBiasY, kStateGnssBiasY), 1.5 * 1.5 * (1.0 - e * e), 1e-9);
+  EXPECT_EQ(s.P(kStateGnssBiasX, kStateX), 0.0);  // not coupled by the motion
+  // tau = 0: held, with its variance.
+  const StateVector before = s.x;
+  const double var_before = s.P(kStateGnssBiasX, kStateGnssBiasX);
+  predictState(&s, 40.0, q, 0.02);
+  EXPECT_EQ(s.x(kStateGnssBiasX), before(kStateGnssBiasX));
+  EXPECT_EQ(s.P(kStateGnssBiasX, kStateGnssBiasX), var_before);
 }
 
 TEST(EkfGating, ChiSquareQuantilesMatchTables) {

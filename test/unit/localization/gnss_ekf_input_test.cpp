@@ -1,7 +1,9 @@
 // The EKF's optional GNSS input (LocalizationFilter::addGnss, gnss_position.h): fixes made with
 // mapToGeodetic from a known map position in a georeferenced map; the filter converges to the
-// position from fixes alone, a 50 m jump is gated out and counted, a fix without a solution is
-// refused with its reason, and with the input off nothing changes. Fixed seeds.
+// position from fixes alone, its covariance covers a receiver's bias (and would not with fixes
+// taken as independent), scan matches pin the pose while the fixes calibrate the bias, a 50 m
+// jump is gated out and counted, a fix without a solution is refused with its reason, and with
+// the input off nothing changes. Fixed seeds.
 #include <cmath>
 #include <random>
 
@@ -28,10 +30,12 @@ GnssFix fixAt(double stamp, double x, double y, double z, double sigma) {
   return f;
 }
 
-LocalizationFilter makeFilter(bool gnss) {
+LocalizationFilter makeFilter(bool gnss, bool estimate_bias = true) {
   FilterPolicyOptions p;
   p.gnss_enabled = gnss;
-  auto f = LocalizationFilter::create(EkfOptions{}, p);
+  EkfOptions e;
+  e.estimate_gnss_bias = estimate_bias;
+  auto f = LocalizationFilter::create(e, p);
   EXPECT_TRUE(f.ok()) << f.error();
   f->setGeoreference(georeference());
   return std::move(f).value();
@@ -48,9 +52,11 @@ void start(LocalizationFilter* f) {
   ASSERT_TRUE(f->setInitialPose(p, c, 0.0, true).ok());
 }
 
-/// Zero twist at 50 Hz (a vehicle standing still), fixes at 5 Hz with white noise.
+/// Zero twist at 50 Hz (a vehicle standing still), fixes at 5 Hz with white noise of `sigma`
+/// plus a constant receiver bias, scan matches of the truth (3 cm) at 10 Hz when `matches`.
 void run(LocalizationFilter* f, double t0, double t1, std::mt19937* rng, double sigma = 1.1,
-         bool fixes = true) {
+         bool fixes = true, const Eigen::Vector2d& bias = Eigen::Vector2d::Zero(),
+         bool matches = false) {
   std::normal_distribution<double> n(0.0, sigma);
   const int steps = static_cast<int>(std::lround((t1 - t0) / 0.02));
   for (int k = 0; k < steps; ++k) {
@@ -60,10 +66,24 @@ void run(LocalizationFilter* f, double t0, double t1, std::mt19937* rng, double 
     tw.covariance = Matrix6d::Identity() * 1e-4;
     f->addTwist(tw);
     if (fixes && k % 10 == 0) {
-      const FuseReport r = f->addGnss(fixAt(t, 300.0 + n(*rng), 200.0 + n(*rng), 0.0, sigma));
+      const FuseReport r =
+          f->addGnss(fixAt(t, 300.0 + bias.x() + n(*rng), 200.0 + bias.y() + n(*rng), 0.0, sigma));
+      EXPECT_TRUE(r.fused()) << r.reason << " d2 " << r.mahalanobis_sq;
+    }
+    if (matches && k % 5 == 0) {
+      Pose6 p;
+      p.x = 300.0;
+      p.y = 200.0;
+      p.yaw = 0.4;
+      const FuseReport r = f->addMatch(t, p, Matrix6d::Identity() * 0.03 * 0.03);
       EXPECT_TRUE(r.fused()) << r.reason << " d2 " << r.mahalanobis_sq;
     }
   }
+}
+
+double horizontalError(const LocalizationFilter& f) {
+  const EkfState& s = f.ekf().state();
+  return std::hypot(s.x(kStateX) - 300.0, s.x(kStateY) - 200.0);
 }
 
 TEST(GnssEkfInput, ConvergesToAFixedPositionFromFixesAlone) {
@@ -71,17 +91,64 @@ TEST(GnssEkfInput, ConvergesToAFixedPositionFromFixesAlone) {
   start(&f);
   std::mt19937 rng(7);
   run(&f, 0.0, 120.0, &rng);
-  const EkfState s = f.ekf().state();
-  const double err = std::hypot(s.x(kStateX) - 300.0, s.x(kStateY) - 200.0);
+  const double err = horizontalError(f);
   const EkfDiagnostics d = f.ekf().diagnostics();
   const double sigma = d.max_horizontal_sigma_m;
-  std::printf("[gnss_ekf_input] after 600 fixes: error %.3f m, horizontal sigma %.3f m\n", err,
-              sigma);
+  std::printf("[gnss_ekf_input] after 600 unbiased fixes: error %.3f m, horizontal sigma %.3f m\n",
+              err, sigma);
   EXPECT_LT(err, 0.3);
-  EXPECT_LT(sigma, 0.5);
-  EXPECT_LT(err, 4.0 * sigma);
+  // The fixes cannot tell the position from the receiver's bias (1 m): the filter stays that
+  // unsure, however many fixes came.
+  EXPECT_GT(sigma, 0.7);
+  EXPECT_LT(sigma, 1.5);
   EXPECT_EQ(d.source(MeasurementSource::kGnssPosition).fused, 600u);
   EXPECT_EQ(d.source(MeasurementSource::kGnssPosition).rejected_gate, 0u);
+}
+
+TEST(GnssEkfInput, ABiasedReceiverStaysInsideTheCovarianceOnlyWithTheBiasState) {
+  // A receiver 1.5 m off (1.5 sigma of the bias model) for two minutes, no scan matches.
+  const Eigen::Vector2d bias(1.2, -0.9);
+  LocalizationFilter with_bias = makeFilter(true), independent = makeFilter(true, false);
+  start(&with_bias);
+  start(&independent);
+  std::mt19937 a(11), b(11);
+  run(&with_bias, 0.0, 120.0, &a, 0.5, true, bias);
+  run(&independent, 0.0, 120.0, &b, 0.5, true, bias);
+  const double err_bias = horizontalError(with_bias);
+  const double err_indep = horizontalError(independent);
+  const double sigma_bias = with_bias.ekf().diagnostics().max_horizontal_sigma_m;
+  const double sigma_indep = independent.ekf().diagnostics().max_horizontal_sigma_m;
+  std::printf(
+      "[gnss_ekf_input] biased receiver, 120 s: with the bias state error %.2f m, sigma %.2f m; "
+      "fixes as independent error %.2f m, sigma %.2f m\n",
+      err_bias, sigma_bias, err_indep, sigma_indep);
+  EXPECT_NEAR(err_bias, bias.norm(), 0.3);  // the fixes' mean: nothing else to go by
+  EXPECT_LT(err_bias, 3.0 * sigma_bias);    // ... but the covariance says so
+  EXPECT_NEAR(err_indep, bias.norm(), 0.3);
+  EXPECT_GT(err_indep, 3.0 * sigma_indep);  // what the bias state mends: sure of a wrong mean
+}
+
+TEST(GnssEkfInput, MatchesPinThePoseAndTheFixesCalibrateTheBias) {
+  const Eigen::Vector2d bias(1.2, -0.9);
+  LocalizationFilter f = makeFilter(true);
+  start(&f);
+  std::mt19937 rng(12);
+  run(&f, 0.0, 60.0, &rng, 0.5, true, bias, true);
+  const EkfDiagnostics d = f.ekf().diagnostics();
+  std::printf(
+      "[gnss_ekf_input] with matches, 60 s: error %.3f m, bias estimate (%.2f, %.2f) m, sigma "
+      "%.2f m\n",
+      horizontalError(f), d.gnss_bias_m.x(), d.gnss_bias_m.y(), d.gnss_bias_sigma_m);
+  EXPECT_LT(horizontalError(f), 0.02);  // the fixes do not pull the matched pose
+  // A bias that wanders with tau = 60 s is known from the last minute of fixes only: about
+  // 0.2 m from 0.5 m fixes at 5 Hz (the Riccati equation's steady state).
+  EXPECT_LT(d.gnss_bias_sigma_m, 0.3);
+  EXPECT_LT((d.gnss_bias_m - bias).norm(), 3.0 * d.gnss_bias_sigma_m);
+  // Matching stops (snow): ten seconds on the fixes alone start from the calibrated bias.
+  run(&f, 60.0, 70.0, &rng, 0.5, true, bias, false);
+  const double err = horizontalError(f);
+  std::printf("[gnss_ekf_input] then 10 s on fixes alone: error %.3f m\n", err);
+  EXPECT_LT(err, 0.3);
 }
 
 TEST(GnssEkfInput, GatingRejectsA50mJump) {

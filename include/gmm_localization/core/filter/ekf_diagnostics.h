@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <string>
 
+#include <Eigen/Core>
+
 #include "gmm_localization/core/filter/ekf_measurement.h"
 
 namespace gmm_localization {
@@ -77,6 +79,10 @@ struct EkfDiagnostics {
   /// Estimated scale error of the INS linear twist and its sigma [-] (ekf_state.h).
   double twist_scale = NAN;
   double twist_scale_sigma = NAN;
+  /// Estimated GNSS receiver bias in the map frame [m] and the sqrt of its covariance's largest
+  /// eigenvalue [m] (NaN when EkfOptions::estimate_gnss_bias is off).
+  Eigen::Vector2d gnss_bias_m = Eigen::Vector2d::Constant(NAN);
+  double gnss_bias_sigma_m = NAN;
 
   const SourceCounters& source(MeasurementSource s) const { return sources[static_cast<int>(s)]; }
 };

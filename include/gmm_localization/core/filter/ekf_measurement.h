@@ -122,6 +122,8 @@ enum class MeasurementModel {
   kDirect,                    ///< z = x[indices]
   kAccelerationMinusGravity,  ///< z = specific force f; h(x) = a + R(roll, pitch)^T g_up
   kScaledTwist,               ///< INS twist: h(x) = (1 + s) v for vx, vy, vz rows, w for the rest
+  kBiasedPosition,            ///< GNSS fix: h(x) = p + b for the x, y rows (b: the receiver's
+                              ///< bias, EkfOptions::estimate_gnss_bias), z for the z row
   /// Not an observation: the indexed components' variances are raised to at least z (their
   /// correlations dropped), never gated. Kept in the history like a measurement, so that a
   /// pose fused later at an earlier stamp, or one stamped after it, sees it in time order.
@@ -145,7 +147,8 @@ struct EkfMeasurement {
 /// disabled fails with a reason saying so.
 Result<EkfMeasurement> makePoseMeasurement(const PoseMeasurement& m, const EkfOptions& options);
 Result<EkfMeasurement> makeTwistMeasurement(const TwistMeasurement& m, const EkfOptions& options);
-/// Source kGnssPosition, model kDirect on x, y (and z).
+/// Source kGnssPosition on x, y (and z): model kBiasedPosition with
+/// EkfOptions::estimate_gnss_bias, else kDirect.
 Result<EkfMeasurement> makePositionMeasurement(const PositionMeasurement& m,
                                                const EkfOptions& options);
 Result<EkfMeasurement> makeImuOrientationMeasurement(const ImuMeasurement& m,
@@ -160,7 +163,8 @@ Result<EkfMeasurement> makeImuAccelerationMeasurement(const ImuMeasurement& m,
 /// Predicted measurement h(x) and Jacobian H (size x kStateSize) at state x. For
 /// kAccelerationMinusGravity, H has identity on a and the partials of R^T g_up in roll and
 /// pitch (see GravityRemoval::kStateEstimate). For kScaledTwist a linear row k has (1 + s) on
-/// v_k and v_k on s (EkfOptions::estimate_twist_scale).
+/// v_k and v_k on s (EkfOptions::estimate_twist_scale). For kBiasedPosition the x and y rows
+/// have 1 on the position and 1 on the bias of that axis.
 void evaluateMeasurement(const EkfMeasurement& m, const StateVector& x, double gravity_mps2,
                          MeasurementVector* h, MeasurementJacobian* jacobian);
 

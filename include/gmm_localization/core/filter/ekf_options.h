@@ -60,7 +60,8 @@ struct EkfOptions {
   /// over-confident (zero) covariance from making the update singular.
   double min_measurement_variance = 1e-9;
 
-  /// Process noise spectral density per state, in state order [unit^2 / s], each finite and
+  /// Process noise spectral density per state from x to the twist scale (the GNSS bias has its
+  /// own model, gnss_bias_* below), in state order [unit^2 / s], each finite and
   /// >= 0: a prediction over dt adds Q = diag(q) * dt. Position and orientation integrate the
   /// velocities exactly, so theirs only absorb model error; velocities, rates and
   /// accelerations are random walks whose density sets how fast the filter follows changes.
@@ -68,7 +69,7 @@ struct EkfOptions {
   /// ground): they keep it slightly conservative (NEES below its dimension), not overconfident.
   /// The twist scale's density sets how fast a change of the INS scale is followed: 1e-9/s
   /// lets it wander by 0.1 % in 1000 s.
-  std::array<double, kStateSize> process_noise_density = {
+  std::array<double, kTunedStateCount> process_noise_density = {
       1e-4, 1e-4, 1e-4,  // x, y, z            [m^2/s]
       1e-6, 1e-6, 1e-6,  // roll, pitch, yaw   [rad^2/s]
       1e-3, 1e-3, 1e-3,  // vx, vy, vz         [(m/s)^2/s]
@@ -81,12 +82,12 @@ struct EkfOptions {
   /// [unit^2]. Wide on purpose: reset() sets velocity, rates and acceleration to zero, and a
   /// vehicle already moving at 20 m/s must not have its first twist gated out.
   /// The twist scale starts at 0 with this variance (1e-4: a 1 % scale error is one sigma).
-  std::array<double, kStateSize> initial_variance = {1.0,   1.0,   1.0,    // x, y, z
-                                                     0.01,  0.01,  0.1,    // roll, pitch, yaw
-                                                     400.0, 400.0, 400.0,  // vx, vy, vz
-                                                     1.0,   1.0,   1.0,    // wx, wy, wz
-                                                     25.0,  25.0,  25.0,   // ax, ay, az
-                                                     1e-4};                // twist scale
+  std::array<double, kTunedStateCount> initial_variance = {1.0,   1.0,   1.0,    // x, y, z
+                                                           0.01,  0.01,  0.1,    // roll, pitch, yaw
+                                                           400.0, 400.0, 400.0,  // vx, vy, vz
+                                                           1.0,   1.0,   1.0,    // wx, wy, wz
+                                                           25.0,  25.0,  25.0,   // ax, ay, az
+                                                           1e-4};                // twist scale
 
   /// Mahalanobis gates, as the probability mass of the chi-square distribution (with the
   /// measurement's dimension as degrees of freedom) that is accepted, range (0, 1]; 1 disables
@@ -110,6 +111,15 @@ struct EkfOptions {
   /// Estimate the scale error s of the INS linear twist (the twist model is then
   /// z = (1 + s) v, ekf_state.h). false: z = v, s stays 0 and is never coupled to the rest.
   bool estimate_twist_scale = true;
+  /// Estimate the GNSS receiver's slow bias b (ekf_state.h): a fix then reads position + b, and
+  /// b is a first-order Gauss-Markov process, b' = -b / tau + white noise, of stationary sigma
+  /// gnss_bias_sigma_m per horizontal axis and correlation time gnss_bias_tau_s; it starts at 0
+  /// with variance sigma^2. false: fixes read the position, b stays 0 and uncoupled (each fix
+  /// is then independent, and a few hundred of them make the filter sure of their mean).
+  /// The defaults: a single-frequency receiver in a town (1 m, a minute).
+  bool estimate_gnss_bias = true;
+  double gnss_bias_sigma_m = 1.0;
+  double gnss_bias_tau_s = 60.0;
 
   /// Success, or a reason naming the first offending key, its value and the allowed range.
   Status validate() const;

@@ -11,6 +11,9 @@
 // One discrete step of length dt: p += R (v dt + a dt^2 / 2), rpy += E w dt,
 // v += (a - w x v) dt; angles are wrapped afterwards. Process noise Q = diag(q) dt with q the
 // per-state spectral densities (EkfOptions::process_noise_density).
+// The GNSS bias b (ekf_state.h) is a first-order Gauss-Markov process, discretised exactly:
+// b <- e b and its variance gains (1 - e^2) sigma^2, e = exp(-dt / tau), so that sigma^2 is
+// its stationary variance; tau = 0 holds b (and its variance) constant.
 
 #include <array>
 
@@ -22,11 +25,18 @@ namespace gmm_localization {
 /// F = df/dx at x. dt_s >= 0 [s]; dt_s = 0 returns x unchanged (angles wrapped) and F = I.
 StateVector predictStep(const StateVector& x, double dt_s, StateCovariance* jacobian);
 
+/// The GNSS bias's Gauss-Markov process (EkfOptions::gnss_bias_*); tau_s = 0: held constant.
+struct GnssBiasProcess {
+  double sigma_m = 0.0;
+  double tau_s = 0.0;
+};
+
 /// Advances state (mean, covariance and time_s) to time_s, integrating in sub-steps of at most
-/// max_step_s: x <- f(x, dt), P <- F P F^T + diag(q) dt, then P is symmetrised. Requires
+/// max_step_s: x <- f(x, dt), P <- F P F^T + Q dt, then P is symmetrised. Requires
 /// time_s >= state->time_s (an earlier time leaves the state unchanged) and a finite state;
 /// the caller bounds time_s - state->time_s (EkfOptions::max_prediction_gap_s).
 void predictState(EkfState* state, double time_s,
-                  const std::array<double, kStateSize>& process_noise_density, double max_step_s);
+                  const std::array<double, kTunedStateCount>& process_noise_density,
+                  double max_step_s, const GnssBiasProcess& gnss_bias = {});
 
 }  // namespace gmm_localization

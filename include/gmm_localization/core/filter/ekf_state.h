@@ -1,7 +1,7 @@
 #pragma once
 // EKF state layout, frames and the small geometric helpers every EKF file shares.
 //
-// The state (robot_localization's 15 components plus one calibration state) describes
+// The state (robot_localization's 15 components plus three calibration states) describes
 // base_link in the map frame (REP-105, x east, y north, z up; REP-103 SI units):
 //   position        x, y, z            map frame                                 [m]
 //   orientation     roll, pitch, yaw   map_R_base = Rz(yaw) Ry(pitch) Rx(roll)   [rad]
@@ -9,6 +9,7 @@
 //   angular rate    wx, wy, wz         base_link frame                           [rad/s]
 //   acceleration    ax, ay, az         base_link frame, gravity excluded         [m/s^2]
 //   twist scale     s                  the INS linear twist reads (1 + s) v      [-]
+//   GNSS bias       bx, by             the receiver's slow error, map frame      [m]
 // Angles are kept wrapped to [-pi, pi). The Euler parameterisation is singular at |pitch| =
 // pi/2, which a ground vehicle never reaches; the models clamp cos(pitch) away from zero so no
 // division by zero can occur, but near the singularity results are meaningless.
@@ -27,6 +28,15 @@
 // s in the state the matches calibrate the twist (s is observable whenever the vehicle moves) and
 // v is the true body velocity. s is a slow random walk; it is kept by setPose() (a relocalization
 // does not change the INS) and starts at 0 on reset().
+//
+// Why the GNSS bias: a receiver's error is mostly slow (multipath, atmosphere, orbits: metres
+// that change over minutes), not white. Fused as independent fixes, the mean of a few hundred of
+// them was taken for the truth: the covariance shrank to decimetres while the error stayed at
+// the bias. With b = (bx, by) in the state a fix reads p + b (EkfOptions::estimate_gnss_bias);
+// b is a first-order Gauss-Markov process (stationary sigma gnss_bias_sigma_m, correlation time
+// gnss_bias_tau_s), so from fixes alone the position stays as uncertain as the bias, and where
+// scan matches pin the position the fixes calibrate b instead of pulling the pose. Kept by
+// setPose(); starts at 0 with its stationary variance on reset().
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -53,8 +63,14 @@ enum StateIndex : int {
   kStateAy,
   kStateAz,
   kStateTwistScale,  ///< s: INS linear twist = (1 + s) x true body velocity
-  kStateSize         ///< number of states (16)
+  kStateGnssBiasX,   ///< the GNSS receiver's bias along the map's x [m]
+  kStateGnssBiasY,   ///< ... along y [m]
+  kStateSize         ///< number of states (18)
 };
+
+/// States with an entry in EkfOptions::process_noise_density and initial_variance (the GNSS
+/// bias follows its own Gauss-Markov parameters instead).
+constexpr int kTunedStateCount = kStateGnssBiasX;
 
 /// First index of each 3-vector block.
 constexpr int kPositionBlock = kStateX;
@@ -103,6 +119,8 @@ struct EkfState {
   Eigen::Vector3d linearAcceleration() const { return x.segment<3>(kLinearAccelerationBlock); }
   /// Scale error s of the INS linear twist (which reads (1 + s) times the true velocity) [-].
   double twistScale() const { return x(kStateTwistScale); }
+  /// The GNSS receiver's bias in the map frame (a fix reads position + bias) [m].
+  Eigen::Vector2d gnssBias() const { return x.segment<2>(kStateGnssBiasX); }
   /// Covariance of (vx, vy, vz, wx, wy, wz), the order of geometry_msgs TwistWithCovariance.
   Matrix6d twistCovariance() const { return P.block<6, 6>(kStateVx, kStateVx); }
 };

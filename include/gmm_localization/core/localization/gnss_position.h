@@ -7,9 +7,11 @@
 //
 // The measurement: base_link = antenna - Rz(yaw) * antenna_in_base (yaw: the filter's current
 // heading; roll and pitch neglected), covariance = the fix's (unknown_sigma_m when it reports
-// none) + min_sigma_m^2 (the map's own georeference error). The EKF fuses each fix as
-// independent: a receiver's slowly varying bias (metres, minutes) is not modelled, so from
-// fixes alone the filter's covariance is optimistic about that bias.
+// none) + min_sigma_m^2 (the map's own georeference error). The EKF models a receiver's
+// slowly varying bias (metres, minutes) as a state (EkfOptions::estimate_gnss_bias,
+// ekf_state.h): the fix reads the position plus that bias. The fix's covariance is taken as its
+// white part although receivers usually report their whole error: conservative, the bias is
+// then counted twice.
 // Units: metres, radians, seconds.
 
 #include <cmath>
