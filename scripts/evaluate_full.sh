@@ -11,12 +11,18 @@
 #
 #   ./scripts/evaluate_full.sh            # everything
 #   GMM_FULL_REPLAY=0 ./scripts/evaluate_full.sh   # offline evaluation only
+#   GMM_FULL_IMPERFECT=1 ...   # also the imperfect world (SLAM-like map poses, calibration
+#                              # errors, an aged town): a second mapping pass, map and two drives
+#   GMM_FULL_KEEP_BAGS=0 ...   # delete each drive's bag once scored (the disk holds one at a time)
+#   GMM_FULL_OFFSETS=N ...     # Fig. 8 registrations per drive (300; 0: none)
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/env.sh"
 cd "$GMM_REPO"
 
 OUT="${GMM_FULL_DIR:-$GMM_WS/full}"
 REPLAY="${GMM_FULL_REPLAY:-1}"
+IMPERFECT="${GMM_FULL_IMPERFECT:-0}"
+KEEP_BAGS="${GMM_FULL_KEEP_BAGS:-1}"
 OFFSETS="${GMM_FULL_OFFSETS:-300}"
 AZ=()
 [ -n "${GMM_FULL_AZIMUTH_STEP:-}" ] && AZ=(--azimuth-step "$GMM_FULL_AZIMUTH_STEP")
@@ -32,41 +38,66 @@ BIN="$GMM_DEVEL/lib/gmm_localization"
 mkdir -p "$OUT"
 t() { local s=$SECONDS; "$@"; echo "[full] $(basename "$1") ${*:2:2}: $((SECONDS - s)) s"; }
 
-[ -f "$OUT/mapping.done" ] || {
-  t "$BIN/simulate" "${TOWN[@]}" "${AZ[@]}" --pass mapping --kitti "$OUT/mapping" --kitti-every 2 --quiet
-  touch "$OUT/mapping.done"
-}
-[ -f "$OUT/map.done" ] || {
-  t "$BIN/build_map" --kitti "$OUT/mapping" --kitti-fields xyzi --output "$OUT/map" --overwrite
-  touch "$OUT/map.done"
-}
-for ds in downtown snowy; do
-  [ -f "$OUT/$ds.done" ] || {
-    t "$BIN/simulate" "${TOWN[@]}" "${AZ[@]}" --pass "$ds" --bag "$OUT/$ds.bag" --quiet
-    touch "$OUT/$ds.done"
+# The imperfect world (GMM_FULL_IMPERFECT=1; docs/simulator.md, as in demo.sh): the mapping
+# vehicle's poses come from a SLAM back end and its sensors carry calibration errors; the town
+# has aged before the drives, whose vehicle has calibration errors of its own. Its drives are
+# scored against the exact truth and against the truth in the map's frame (--map-poses).
+IMPERFECT_MAPPING=(--map-pose-error realistic --extrinsic-error realistic)
+IMPERFECT_DRIVE=(--aging realistic --extrinsic-error realistic)
+
+map_world() {  # map_world SUFFIX MAPPING_OPTIONS... : the mapping pass and its map
+  local sfx="$1"
+  shift
+  [ -f "$OUT/mapping$sfx.done" ] || {
+    t "$BIN/simulate" "${TOWN[@]}" "${AZ[@]}" --pass mapping --kitti "$OUT/mapping$sfx" \
+      --kitti-every 2 --quiet "$@"
+    touch "$OUT/mapping$sfx.done"
   }
-done
+  [ -f "$OUT/map$sfx.done" ] || {
+    t "$BIN/build_map" --kitti "$OUT/mapping$sfx" --kitti-fields xyzi --output "$OUT/map$sfx" \
+      --overwrite
+    touch "$OUT/map$sfx.done"
+  }
+}
 
 DIRS=()
-for ds in downtown snowy; do
-  t "$BIN/evaluate" bag --bag "$OUT/$ds.bag" --map "$OUT/map" --dataset "$ds" \
-    --offset-scans "$OFFSETS" --out "$OUT/eval_$ds" | tee "$OUT/eval_$ds.log" | grep -E "^\|" || true
-  DIRS+=("$OUT/eval_$ds")
-done
-
-if [ "$REPLAY" = 1 ]; then
-  for ds in downtown snowy; do
+run_drive() {  # run_drive DATASET SUFFIX WORLD : simulate, evaluate offline, replay
+  local ds="$1" sfx="$2" world="$3" port args
+  local bag="$OUT/$ds$sfx.bag" options=()
+  [ "$world" = imperfect ] && options=("${IMPERFECT_DRIVE[@]}")
+  [ -f "$OUT/$ds$sfx.done" ] || {
+    t "$BIN/simulate" "${TOWN[@]}" "${AZ[@]}" --pass "$ds" --bag "$bag" --quiet "${options[@]}"
+    touch "$OUT/$ds$sfx.done"
+  }
+  local scoring=(--world "$world")
+  [ "$world" = imperfect ] && scoring+=(--map-poses "$OUT/mapping$sfx")
+  t "$BIN/evaluate" bag --bag "$bag" --map "$OUT/map$sfx" --dataset "$ds" "${scoring[@]}" \
+    --offset-scans "$OFFSETS" --out "$OUT/eval_$ds$sfx" | tee "$OUT/eval_$ds$sfx.log" |
+    grep -E "^\|" || true
+  DIRS+=("$OUT/eval_$ds$sfx")
+  if [ "$REPLAY" = 1 ]; then
     port=$(gmm_free_port)
-    args=$(/usr/bin/python3 "$GMM_REPO/scripts/initial_pose_args.py" "$OUT/$ds.bag")
+    args=$(/usr/bin/python3 "$GMM_REPO/scripts/initial_pose_args.py" "$bag")
     # shellcheck disable=SC2086
     ROS_MASTER_URI="http://localhost:$port" ROS_LOG_DIR="$OUT/ros_logs" \
-      roslaunch -p "$port" gmm_localization replay.launch bag:="$OUT/$ds.bag" map:="$OUT/map" \
-      record:="$OUT/replay_$ds.bag" use_initial_pose:=true $args >"$OUT/replay_$ds.log" 2>&1 || true
+      roslaunch -p "$port" gmm_localization replay.launch bag:="$bag" map:="$OUT/map$sfx" \
+      record:="$OUT/replay_$ds$sfx.bag" use_initial_pose:=true $args \
+      >"$OUT/replay_$ds$sfx.log" 2>&1 || true
     sleep 2
-    "$BIN/evaluate" recorded --bag "$OUT/replay_$ds.bag" --source-bag "$OUT/$ds.bag" \
-      --dataset "$ds" --out "$OUT/eval_replay_$ds" >"$OUT/eval_replay_$ds.log"
-    DIRS+=("$OUT/eval_replay_$ds")
-  done
+    "$BIN/evaluate" recorded --bag "$OUT/replay_$ds$sfx.bag" --source-bag "$bag" \
+      --dataset "$ds" "${scoring[@]}" --out "$OUT/eval_replay_$ds$sfx" \
+      >"$OUT/eval_replay_$ds$sfx.log"
+    DIRS+=("$OUT/eval_replay_$ds$sfx")
+  fi
+  # GMM_FULL_KEEP_BAGS=0: the drive's bag (about 18 GB) goes once scored; a rerun simulates it.
+  [ "$KEEP_BAGS" = 1 ] || rm -f "$bag" "$OUT/$ds$sfx.done"
+}
+
+map_world ""
+for ds in downtown snowy; do run_drive "$ds" "" perfect; done
+if [ "$IMPERFECT" = 1 ]; then
+  map_world _imperfect "${IMPERFECT_MAPPING[@]}"
+  for ds in downtown snowy; do run_drive "$ds" _imperfect imperfect; done
 fi
 
 /usr/bin/python3 "$GMM_REPO/scripts/plot_evaluation.py" --out "$OUT/figures" "${DIRS[@]}"
