@@ -25,6 +25,12 @@ void EkfNode::setupDiagnostics() {
     s.add("running", filter_->active());
     s.add("horizontal sigma (max) [m]", fixed(d.max_horizontal_sigma_m, 3));
     s.add("yaw sigma [deg]", fixed(d.yaw_sigma_rad * 180.0 / M_PI, 2));
+    if (std::isfinite(d.gyro_bias_sigma_radps)) {
+      s.add("IMU gyro bias x, y, z [mrad/s] (sigma)",
+            fixed(1e3 * d.gyro_bias_radps.x(), 3) + ", " + fixed(1e3 * d.gyro_bias_radps.y(), 3) +
+                ", " + fixed(1e3 * d.gyro_bias_radps.z(), 3) + " (" +
+                fixed(1e3 * d.gyro_bias_sigma_radps, 3) + ")");
+    }
     s.add("INS twist scale error [%] (sigma)",
           fixed(100.0 * d.twist_scale, 3) + " (" + fixed(100.0 * d.twist_scale_sigma, 3) + ")");
     for (int i = 0; i < kMeasurementSourceCount; ++i) {

@@ -10,7 +10,7 @@ namespace {
 
 // A list of kTunedStateCount values, or of the kTunedStateCount - 1 kinematic ones (the lists
 // before the twist scale joined the state): the twist scale then keeps its default. The GNSS
-// bias has no entry (gnss_bias_sigma_m, gnss_bias_tau_s).
+// and gyro biases have no entry (gnss_bias_*, gyro_bias_*).
 std::array<double, kTunedStateCount> perState(
     const ParamSource& nh, const std::string& key,
     const std::array<double, kTunedStateCount>& defaults) {
@@ -69,6 +69,9 @@ EkfOptions loadEkfOptions(const ParamSource& nh) {
   o.estimate_gnss_bias = param(nh, "estimate_gnss_bias", o.estimate_gnss_bias);
   o.gnss_bias_sigma_m = param(nh, "gnss_bias_sigma_m", o.gnss_bias_sigma_m);
   o.gnss_bias_tau_s = param(nh, "gnss_bias_tau_s", o.gnss_bias_tau_s);
+  o.estimate_gyro_bias = param(nh, "estimate_gyro_bias", o.estimate_gyro_bias);
+  o.gyro_bias_sigma_radps = param(nh, "gyro_bias_sigma_radps", o.gyro_bias_sigma_radps);
+  o.gyro_bias_random_walk = param(nh, "gyro_bias_random_walk", o.gyro_bias_random_walk);
   const Status valid = o.validate();
   if (!valid) throw ConfigError(valid.error());
   return o;

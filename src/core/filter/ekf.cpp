@@ -87,6 +87,8 @@ Result<EkfState> Ekf::validatedPoseState(const Eigen::Isometry3d& map_T_base,
   const double bias_var = options_.gnss_bias_sigma_m * options_.gnss_bias_sigma_m;
   s.P(kStateGnssBiasX, kStateGnssBiasX) = bias_var;
   s.P(kStateGnssBiasY, kStateGnssBiasY) = bias_var;
+  const double gyro_var = options_.gyro_bias_sigma_radps * options_.gyro_bias_sigma_radps;
+  for (int i = kStateGyroBiasX; i <= kStateGyroBiasZ; ++i) s.P(i, i) = gyro_var;
   s.P.topLeftCorner<6, 6>() = m->R;  // symmetrised, floored
   return s;
 }
@@ -114,7 +116,7 @@ Status Ekf::setPose(const Eigen::Isometry3d& map_T_base, const Matrix6d& pose_co
   if (!pose) return Status::failure(pose.error());
   EkfState s = latest;
   predictState(&s, std::max(time_s, latest.time_s), options_.process_noise_density,
-               options_.max_prediction_step_s, gnssBiasProcess());
+               options_.max_prediction_step_s, calibrationProcess());
   s.x.head<6>() = pose->x.head<6>();
   s.P.topRows<6>().setZero();
   s.P.leftCols<6>().setZero();
@@ -126,9 +128,14 @@ Status Ekf::setPose(const Eigen::Isometry3d& map_T_base, const Matrix6d& pose_co
   return Status::success();
 }
 
-GnssBiasProcess Ekf::gnssBiasProcess() const {
-  if (!options_.estimate_gnss_bias) return {};
-  return {options_.gnss_bias_sigma_m, options_.gnss_bias_tau_s};
+CalibrationProcess Ekf::calibrationProcess() const {
+  CalibrationProcess c;
+  if (options_.estimate_gnss_bias) {
+    c.gnss_bias_sigma_m = options_.gnss_bias_sigma_m;
+    c.gnss_bias_tau_s = options_.gnss_bias_tau_s;
+  }
+  if (options_.estimate_gyro_bias) c.gyro_bias_density = options_.gyro_bias_random_walk;
+  return c;
 }
 
 double Ekf::time() const {
@@ -275,7 +282,7 @@ FuseReport Ekf::process(const Result<EkfMeasurement>& m, MeasurementSource sourc
 FuseReport Ekf::fuseAfter(const EkfMeasurement& m, const EkfState& from) {
   EkfState s = from;
   predictState(&s, m.stamp_s, options_.process_noise_density, options_.max_prediction_step_s,
-               gnssBiasProcess());
+               calibrationProcess());
   FuseReport report;
   report.source = m.source;
   report.stamp_s = m.stamp_s;
@@ -345,7 +352,7 @@ Result<EkfState> Ekf::stateAt(double time_s) const {
   }
   EkfState s = *from;
   predictState(&s, time_s, options_.process_noise_density, options_.max_prediction_step_s,
-               gnssBiasProcess());
+               calibrationProcess());
   return s;
 }
 
@@ -365,6 +372,11 @@ EkfDiagnostics Ekf::diagnostics() const {
     d.gnss_bias_m = s.gnssBias();
     d.gnss_bias_sigma_m =
         largestSigma(Eigen::Matrix2d(s.P.block<2, 2>(kStateGnssBiasX, kStateGnssBiasX)));
+  }
+  if (options_.estimate_gyro_bias) {
+    d.gyro_bias_radps = s.gyroBias();
+    d.gyro_bias_sigma_radps =
+        largestSigma(Eigen::Matrix3d(s.P.block<3, 3>(kStateGyroBiasX, kStateGyroBiasX)));
   }
   return d;
 }

@@ -247,7 +247,9 @@ Result<EkfMeasurement> makeImuAngularVelocityMeasurement(const ImuMeasurement& m
   if (!m.has_angular_velocity || !options.imu_use_angular_velocity) {
     return Result<EkfMeasurement>::failure(prefix(source, m.stamp_s) + "not present or disabled");
   }
-  return threeAxis(source, MeasurementModel::kDirect, m.stamp_s, kStateWx, m.angular_velocity_radps,
+  const MeasurementModel model =
+      options.estimate_gyro_bias ? MeasurementModel::kBiasedRate : MeasurementModel::kDirect;
+  return threeAxis(source, model, m.stamp_s, kStateWx, m.angular_velocity_radps,
                    m.angular_velocity_covariance, options);
 }
 
@@ -314,6 +316,14 @@ void evaluateMeasurement(const EkfMeasurement& m, const StateVector& x, double g
       const int k = m.indices[i];
       if (k != kStateX && k != kStateY) continue;
       const int b = k == kStateX ? kStateGnssBiasX : kStateGnssBiasY;
+      (*h)(i) += x(b);
+      (*jacobian)(i, b) = 1.0;
+    }
+  }
+  if (m.model == MeasurementModel::kBiasedRate) {
+    // The gyro reads the body rate plus its bias (ekf_state.h).
+    for (int i = 0; i < m.size; ++i) {
+      const int b = kStateGyroBiasX + (m.indices[i] - kStateWx);
       (*h)(i) += x(b);
       (*jacobian)(i, b) = 1.0;
     }

@@ -56,7 +56,9 @@ Status EkfOptions::validate() const {
       inRange("imu_gate_probability", imu_gate_probability, 0.0, 1.0, true, &why) &&
       inRange("gnss_gate_probability", gnss_gate_probability, 0.0, 1.0, true, &why) &&
       inRange("gnss_bias_sigma_m", gnss_bias_sigma_m, 0.0, 100.0, true, &why) &&
-      inRange("gnss_bias_tau_s", gnss_bias_tau_s, 0.0, 1e6, true, &why);
+      inRange("gnss_bias_tau_s", gnss_bias_tau_s, 0.0, 1e6, true, &why) &&
+      inRange("gyro_bias_sigma_radps", gyro_bias_sigma_radps, 0.0, 1.0, true, &why) &&
+      inRange("gyro_bias_random_walk", gyro_bias_random_walk, 0.0, 1.0, false, &why);
   if (!ok) return Status::failure(why);
   if (imu_gravity_removal != GravityRemoval::kStateEstimate &&
       imu_gravity_removal != GravityRemoval::kMeasuredOrientation) {

@@ -71,7 +71,7 @@ StateVector predictStep(const StateVector& x, double dt, StateCovariance* jacobi
 
 void predictState(EkfState* state, double time_s,
                   const std::array<double, kTunedStateCount>& process_noise_density,
-                  double max_step_s, const GnssBiasProcess& gnss_bias) {
+                  double max_step_s, const CalibrationProcess& calibration) {
   double remaining = time_s - state->time_s;
   if (!(remaining > 0.0)) return;
   const int steps = std::max(1, static_cast<int>(std::ceil(remaining / max_step_s)));
@@ -79,11 +79,12 @@ void predictState(EkfState* state, double time_s,
   StateVector q = StateVector::Zero();
   q.head<kTunedStateCount>() =
       Eigen::Map<const Eigen::Matrix<double, kTunedStateCount, 1>>(process_noise_density.data());
-  // The bias's exact discrete Gauss-Markov step (ekf_process_model.h).
-  const bool bias_moves = gnss_bias.tau_s > 0.0;
-  const double decay = bias_moves ? std::exp(-dt / gnss_bias.tau_s) : 1.0;
-  const double bias_var =
-      bias_moves ? (1.0 - decay * decay) * gnss_bias.sigma_m * gnss_bias.sigma_m : 0.0;
+  q.segment<3>(kStateGyroBiasX).setConstant(calibration.gyro_bias_density);
+  // The GNSS bias's exact discrete Gauss-Markov step (ekf_process_model.h).
+  const bool bias_moves = calibration.gnss_bias_tau_s > 0.0;
+  const double decay = bias_moves ? std::exp(-dt / calibration.gnss_bias_tau_s) : 1.0;
+  const double sigma = calibration.gnss_bias_sigma_m;
+  const double bias_var = bias_moves ? (1.0 - decay * decay) * sigma * sigma : 0.0;
   StateCovariance f;
   for (int k = 0; k < steps; ++k) {
     state->x = predictStep(state->x, dt, &f);

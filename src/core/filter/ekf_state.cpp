@@ -7,8 +7,10 @@ namespace gmm_localization {
 
 const char* stateName(int index) {
   static const char* const kNames[kStateSize] = {
-      "x",  "y",  "z",  "roll", "pitch", "yaw", "vx",          "vy",          "vz",
-      "wx", "wy", "wz", "ax",   "ay",    "az",  "twist_scale", "gnss_bias_x", "gnss_bias_y"};
+      "x",           "y",           "z",          "roll",        "pitch",       "yaw",
+      "vx",          "vy",          "vz",         "wx",          "wy",          "wz",
+      "ax",          "ay",          "az",         "twist_scale", "gnss_bias_x", "gnss_bias_y",
+      "gyro_bias_x", "gyro_bias_y", "gyro_bias_z"};
   return index >= 0 && index < kStateSize ? kNames[index] : "?";
 }
 

@@ -221,6 +221,34 @@ TEST(EkfMeasurement, BiasedGnssPositionModelAndJacobian) {
   EXPECT_EQ(jac.block(0, kStateGnssBiasX, 3, 2).cwiseAbs().maxCoeff(), 0.0);
 }
 
+TEST(EkfMeasurement, BiasedGyroRateModelAndJacobian) {
+  // The gyro reads w + g per axis; the Jacobian matches finite differences.
+  EkfOptions o;
+  ImuMeasurement imu;
+  imu.stamp_s = 1.0;
+  imu.has_angular_velocity = true;
+  imu.angular_velocity_radps << 0.01, -0.02, 0.3;
+  imu.angular_velocity_covariance = Eigen::Matrix3d::Identity() * 1e-6;
+  auto m = makeImuAngularVelocityMeasurement(imu, o);
+  ASSERT_TRUE(m.ok()) << m.error();
+  EXPECT_EQ(m->model, MeasurementModel::kBiasedRate);
+  StateVector x = StateVector::Zero();
+  x.segment<3>(kStateWx) << 0.011, -0.019, 0.29;
+  x.segment<3>(kStateGyroBiasX) << 0.0005, -0.0003, 0.0007;
+  MeasurementVector h;
+  MeasurementJacobian jac;
+  evaluateMeasurement(*m, x, o.gravity_mps2, &h, &jac);
+  EXPECT_NEAR(h(2), 0.2907, 1e-12);
+  EXPECT_EQ(jac(2, kStateGyroBiasZ), 1.0);
+  EXPECT_EQ(jac(2, kStateGyroBiasX), 0.0);
+  expectJacobianMatchesNumeric(*m, x, o.gravity_mps2, jac);
+  // Off: the rates are read as they are.
+  o.estimate_gyro_bias = false;
+  m = makeImuAngularVelocityMeasurement(imu, o);
+  ASSERT_TRUE(m.ok()) << m.error();
+  EXPECT_EQ(m->model, MeasurementModel::kDirect);
+}
+
 TEST(EkfMeasurement, ImuOrientationIgnoresYaw) {
   EkfOptions o;
   ImuMeasurement imu;

@@ -53,10 +53,14 @@ void runOnce(const EkfOptions& o, unsigned seed, std::vector<double>* nees) {
     x = predictStep(x, dt, nullptr);
     for (int i = 0; i < kTunedStateCount; ++i)
       x(i) += std::sqrt(o.process_noise_density[i] * dt) * n(rng);
-    // The GNSS bias: its Gauss-Markov step (no fixes here: unobserved, it must stay consistent).
+    // The GNSS bias: its Gauss-Markov step (no fixes here: unobserved, it must stay consistent);
+    // the gyro bias: its random walk.
     const double decay = std::exp(-dt / o.gnss_bias_tau_s);
     for (int i = kStateGnssBiasX; i <= kStateGnssBiasY; ++i) {
       x(i) = decay * x(i) + std::sqrt(1.0 - decay * decay) * o.gnss_bias_sigma_m * n(rng);
+    }
+    for (int i = kStateGyroBiasX; i <= kStateGyroBiasZ; ++i) {
+      x(i) += std::sqrt(o.gyro_bias_random_walk * dt) * n(rng);
     }
     for (int i = kStateRoll; i <= kStateYaw; ++i) x(i) = wrapAngle(x(i));
     ImuMeasurement imu;
@@ -66,7 +70,8 @@ void runOnce(const EkfOptions& o, unsigned seed, std::vector<double>* nees) {
     imu.orientation = Eigen::Quaterniond(
         rotationFromRpy(x(kStateRoll) + tilt.x(), x(kStatePitch) + tilt.y(), x(kStateYaw) + 2.0));
     imu.orientation_covariance = Eigen::Matrix3d::Identity() * tilt_sigma * tilt_sigma;
-    imu.angular_velocity_radps = x.segment<3>(kStateWx) + gyro_sigma * noise(3);
+    imu.angular_velocity_radps =
+        x.segment<3>(kStateWx) + x.segment<3>(kStateGyroBiasX) + gyro_sigma * noise(3);
     imu.angular_velocity_covariance = Eigen::Matrix3d::Identity() * gyro_sigma * gyro_sigma;
     const Eigen::Matrix3d r = rotationFromRpy(x(kStateRoll), x(kStatePitch), x(kStateYaw));
     imu.linear_acceleration_mps2 = x.segment<3>(kStateAx) +

@@ -135,7 +135,9 @@ TEST(EkfProcessModel, GnssBiasIsAGaussMarkovProcessAtItsStationaryVariance) {
   s.P(kStateGnssBiasX, kStateGnssBiasX) = 1.5 * 1.5;  // at the stationary variance
   s.P(kStateGnssBiasY, kStateGnssBiasY) = 0.0;        // known exactly at first
   const std::array<double, kTunedStateCount> q{};
-  const GnssBiasProcess bias{1.5, 60.0};
+  CalibrationProcess bias;
+  bias.gnss_bias_sigma_m = 1.5;
+  bias.gnss_bias_tau_s = 60.0;
   predictState(&s, 30.0, q, 0.02, bias);
   const double e = std::exp(-0.5);
   EXPECT_NEAR(s.x(kStateGnssBiasX), 2.0 * e, 1e-9);

@@ -110,8 +110,8 @@ class Ekf {
   // Predicts a copy of `from` to m's stamp, updates it, appends the entry; returns the report.
   FuseReport fuseAfter(const EkfMeasurement& m, const EkfState& from);
   double gateThresholdSq(MeasurementSource source, int dimension) const;
-  // The GNSS bias's process (held when not estimated).
-  GnssBiasProcess gnssBiasProcess() const;
+  // The calibration states' processes (held when not estimated).
+  CalibrationProcess calibrationProcess() const;
   void count(const FuseReport& report);
   Result<EkfState> validatedPoseState(const Eigen::Isometry3d& map_T_base,
                                       const Matrix6d& pose_covariance, double time_s,

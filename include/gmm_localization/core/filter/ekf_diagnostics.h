@@ -83,6 +83,10 @@ struct EkfDiagnostics {
   /// eigenvalue [m] (NaN when EkfOptions::estimate_gnss_bias is off).
   Eigen::Vector2d gnss_bias_m = Eigen::Vector2d::Constant(NAN);
   double gnss_bias_sigma_m = NAN;
+  /// Estimated IMU gyro bias in base_link [rad/s] and the sqrt of its covariance's largest
+  /// eigenvalue (NaN when EkfOptions::estimate_gyro_bias is off).
+  Eigen::Vector3d gyro_bias_radps = Eigen::Vector3d::Constant(NAN);
+  double gyro_bias_sigma_radps = NAN;
 
   const SourceCounters& source(MeasurementSource s) const { return sources[static_cast<int>(s)]; }
 };

@@ -124,6 +124,8 @@ enum class MeasurementModel {
   kScaledTwist,               ///< INS twist: h(x) = (1 + s) v for vx, vy, vz rows, w for the rest
   kBiasedPosition,            ///< GNSS fix: h(x) = p + b for the x, y rows (b: the receiver's
                               ///< bias, EkfOptions::estimate_gnss_bias), z for the z row
+  kBiasedRate,                ///< IMU rates: h(x) = w + g (g: the gyro's bias,
+                              ///< EkfOptions::estimate_gyro_bias)
   /// Not an observation: the indexed components' variances are raised to at least z (their
   /// correlations dropped), never gated. Kept in the history like a measurement, so that a
   /// pose fused later at an earlier stamp, or one stamped after it, sees it in time order.
@@ -164,7 +166,8 @@ Result<EkfMeasurement> makeImuAccelerationMeasurement(const ImuMeasurement& m,
 /// kAccelerationMinusGravity, H has identity on a and the partials of R^T g_up in roll and
 /// pitch (see GravityRemoval::kStateEstimate). For kScaledTwist a linear row k has (1 + s) on
 /// v_k and v_k on s (EkfOptions::estimate_twist_scale). For kBiasedPosition the x and y rows
-/// have 1 on the position and 1 on the bias of that axis.
+/// have 1 on the position and 1 on the bias of that axis; for kBiasedRate each row has 1 on the
+/// rate and 1 on the gyro bias of that axis.
 void evaluateMeasurement(const EkfMeasurement& m, const StateVector& x, double gravity_mps2,
                          MeasurementVector* h, MeasurementJacobian* jacobian);
 

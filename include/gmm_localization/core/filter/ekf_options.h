@@ -120,6 +120,14 @@ struct EkfOptions {
   bool estimate_gnss_bias = true;
   double gnss_bias_sigma_m = 1.0;
   double gnss_bias_tau_s = 60.0;
+  /// Estimate the IMU gyro's bias g (ekf_state.h): the IMU's rates then read w + g, the INS
+  /// twist's rates w. g starts at 0 with sigma gyro_bias_sigma_radps per axis and is a random
+  /// walk of density gyro_bias_random_walk [(rad/s)^2/s]. false: the IMU's rates read w (an
+  /// IMU whose output its INS compensates). Defaults: a tactical MEMS gyro (0.5 mrad/s, a bias
+  /// that wanders by 0.03 mrad/s in an hour).
+  bool estimate_gyro_bias = true;
+  double gyro_bias_sigma_radps = 0.002;
+  double gyro_bias_random_walk = 1e-12;
 
   /// Success, or a reason naming the first offending key, its value and the allowed range.
   Status validate() const;

@@ -13,7 +13,8 @@
 // per-state spectral densities (EkfOptions::process_noise_density).
 // The GNSS bias b (ekf_state.h) is a first-order Gauss-Markov process, discretised exactly:
 // b <- e b and its variance gains (1 - e^2) sigma^2, e = exp(-dt / tau), so that sigma^2 is
-// its stationary variance; tau = 0 holds b (and its variance) constant.
+// its stationary variance; tau = 0 holds b (and its variance) constant. The gyro bias is a
+// random walk: its variance gains its density times dt.
 
 #include <array>
 
@@ -25,10 +26,12 @@ namespace gmm_localization {
 /// F = df/dx at x. dt_s >= 0 [s]; dt_s = 0 returns x unchanged (angles wrapped) and F = I.
 StateVector predictStep(const StateVector& x, double dt_s, StateCovariance* jacobian);
 
-/// The GNSS bias's Gauss-Markov process (EkfOptions::gnss_bias_*); tau_s = 0: held constant.
-struct GnssBiasProcess {
-  double sigma_m = 0.0;
-  double tau_s = 0.0;
+/// The calibration states' processes (EkfOptions::gnss_bias_*, gyro_bias_random_walk): the
+/// GNSS bias's Gauss-Markov process (tau_s = 0: held constant) and the gyro bias's random walk.
+struct CalibrationProcess {
+  double gnss_bias_sigma_m = 0.0;
+  double gnss_bias_tau_s = 0.0;
+  double gyro_bias_density = 0.0;  ///< [(rad/s)^2/s]
 };
 
 /// Advances state (mean, covariance and time_s) to time_s, integrating in sub-steps of at most
@@ -37,6 +40,6 @@ struct GnssBiasProcess {
 /// the caller bounds time_s - state->time_s (EkfOptions::max_prediction_gap_s).
 void predictState(EkfState* state, double time_s,
                   const std::array<double, kTunedStateCount>& process_noise_density,
-                  double max_step_s, const GnssBiasProcess& gnss_bias = {});
+                  double max_step_s, const CalibrationProcess& calibration = {});
 
 }  // namespace gmm_localization

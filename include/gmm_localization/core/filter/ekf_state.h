@@ -1,7 +1,7 @@
 #pragma once
 // EKF state layout, frames and the small geometric helpers every EKF file shares.
 //
-// The state (robot_localization's 15 components plus three calibration states) describes
+// The state (robot_localization's 15 components plus six calibration states) describes
 // base_link in the map frame (REP-105, x east, y north, z up; REP-103 SI units):
 //   position        x, y, z            map frame                                 [m]
 //   orientation     roll, pitch, yaw   map_R_base = Rz(yaw) Ry(pitch) Rx(roll)   [rad]
@@ -10,6 +10,7 @@
 //   acceleration    ax, ay, az         base_link frame, gravity excluded         [m/s^2]
 //   twist scale     s                  the INS linear twist reads (1 + s) v      [-]
 //   GNSS bias       bx, by             the receiver's slow error, map frame      [m]
+//   gyro bias       gx, gy, gz         the IMU's rate error, base_link frame     [rad/s]
 // Angles are kept wrapped to [-pi, pi). The Euler parameterisation is singular at |pitch| =
 // pi/2, which a ground vehicle never reaches; the models clamp cos(pitch) away from zero so no
 // division by zero can occur, but near the singularity results are meaningless.
@@ -37,6 +38,14 @@
 // gnss_bias_tau_s), so from fixes alone the position stays as uncertain as the bias, and where
 // scan matches pin the position the fixes calibrate b instead of pulling the pose. Kept by
 // setPose(); starts at 0 with its stationary variance on reset().
+//
+// Why the gyro bias: an IMU's rates carry a bias of a fraction of a mrad/s that the INS twist's
+// rates do not (they come from the INS's own, compensated solution). Fused as unbiased, the two
+// rate sources disagree and the filter's heading leans by a few tenths of a mrad between the
+// weak heading of the matches (floor 0.01 rad); at speed that is a steady lateral drift that the
+// matches correct only after it has built up (+0.3-0.4 cm beside them on the simulated drives).
+// With g in the state the IMU reads w + g (EkfOptions::estimate_gyro_bias): the INS rates, or
+// the matched heading without them, calibrate it. A slow random walk; kept by setPose().
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -65,11 +74,14 @@ enum StateIndex : int {
   kStateTwistScale,  ///< s: INS linear twist = (1 + s) x true body velocity
   kStateGnssBiasX,   ///< the GNSS receiver's bias along the map's x [m]
   kStateGnssBiasY,   ///< ... along y [m]
-  kStateSize         ///< number of states (18)
+  kStateGyroBiasX,   ///< the IMU gyro's bias about base_link's x [rad/s]
+  kStateGyroBiasY,   ///< ... about y
+  kStateGyroBiasZ,   ///< ... about z
+  kStateSize         ///< number of states (21)
 };
 
-/// States with an entry in EkfOptions::process_noise_density and initial_variance (the GNSS
-/// bias follows its own Gauss-Markov parameters instead).
+/// States with an entry in EkfOptions::process_noise_density and initial_variance (the GNSS and
+/// gyro biases follow their own parameters instead, EkfOptions::gnss_bias_*, gyro_bias_*).
 constexpr int kTunedStateCount = kStateGnssBiasX;
 
 /// First index of each 3-vector block.
@@ -121,6 +133,8 @@ struct EkfState {
   double twistScale() const { return x(kStateTwistScale); }
   /// The GNSS receiver's bias in the map frame (a fix reads position + bias) [m].
   Eigen::Vector2d gnssBias() const { return x.segment<2>(kStateGnssBiasX); }
+  /// The IMU gyro's bias in base_link (the IMU reads w + bias) [rad/s].
+  Eigen::Vector3d gyroBias() const { return x.segment<3>(kStateGyroBiasX); }
   /// Covariance of (vx, vy, vz, wx, wy, wz), the order of geometry_msgs TwistWithCovariance.
   Matrix6d twistCovariance() const { return P.block<6, 6>(kStateVx, kStateVx); }
 };
