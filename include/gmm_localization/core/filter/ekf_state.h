@@ -18,8 +18,9 @@
 // Why 15 kinematic states and not fewer: the matcher observes x, y, yaw (and optionally z, roll,
 // pitch); the Applanix gives body twist; the IMU gives rates, specific force and roll/pitch.
 // Keeping the body acceleration as a state lets the accelerometer contribute (between scan matches
-// and when the odometry twist drops out) at the price of six states that are cheap at this size. No
-// IMU biases are estimated: the Applanix IMU output is bias-compensated by the INS.
+// and when the odometry twist drops out) at the price of six states that are cheap at this size.
+// The accelerometer's bias is not estimated (the INS twist holds the velocity); the gyro's is
+// (below), as an IMU that its INS does not compensate leans the heading.
 //
 // Why the twist scale: an INS measures distance with a scale error of a few tenths of a percent
 // (wheel or DMI calibration, tyre pressure). Its twist is far more precise than that (mm/s), so a
