@@ -60,8 +60,9 @@ struct EkfOptions {
   /// over-confident (zero) covariance from making the update singular.
   double min_measurement_variance = 1e-9;
 
-  /// Process noise spectral density per state from x to the twist scale (the GNSS bias has its
-  /// own model, gnss_bias_* below), in state order [unit^2 / s], each finite and
+  /// Process noise spectral density per state from x to the twist scale (the GNSS and gyro
+  /// biases have their own models, gnss_bias_* and gyro_bias_* below), in state order
+  /// [unit^2 / s], each finite and
   /// >= 0: a prediction over dt adds Q = diag(q) * dt. Position and orientation integrate the
   /// velocities exactly, so theirs only absorb model error; velocities, rates and
   /// accelerations are random walks whose density sets how fast the filter follows changes.
