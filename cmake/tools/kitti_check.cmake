@@ -1,6 +1,7 @@
 # kitti_check: real-data checks on KITTI keyframes (docs/real_data.md): mixtures per class of
 # cell, and leave-one-out registration against PCL NDT and GICP. The peers and the KITTI-style
-# data reader are the benchmark's own (gmm_bench, cmake/tools/bench.cmake).
+# data reader are the benchmark's own (gmm_bench, cmake/tools/bench.cmake), the integrity summary
+# evaluate's (gmm_evaluate).
 add_library(gmm_kitti_check STATIC
   src/tools/kitti_check/kitti_check_data.cpp
   src/tools/kitti_check/kitti_check_register.cpp
@@ -10,7 +11,7 @@ add_library(gmm_kitti_check STATIC
 target_include_directories(gmm_kitti_check PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/src/tools)
 target_include_directories(gmm_kitti_check SYSTEM PRIVATE ${PCL_INCLUDE_DIRS})
 target_compile_definitions(gmm_kitti_check PRIVATE ${PCL_DEFINITIONS})
-target_link_libraries(gmm_kitti_check PUBLIC gmm_bench gmm_core ${PCL_LIBRARIES})
+target_link_libraries(gmm_kitti_check PUBLIC gmm_bench gmm_evaluate gmm_core ${PCL_LIBRARIES})
 
 gmm_add_tool(kitti_check SOURCES src/tools/kitti_check/kitti_check.cpp LIBS gmm_kitti_check)
 

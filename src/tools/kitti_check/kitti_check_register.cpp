@@ -9,6 +9,7 @@
 
 #include "bench/bench_data.h"
 #include "bench/bench_peers.h"
+#include "evaluate/evaluate_integrity.h"
 #include "gmm_localization/core/common/types.h"
 #include "gmm_localization/core/map/map_store.h"
 #include "gmm_localization/core/raster/raster_region.h"
@@ -69,6 +70,8 @@ void runPrior(const Registration* reg, const ChunkMap& raster, std::vector<Peer>
   req.prior = prior;
   req.half_x_m = req.half_y_m = w.half_m;
   req.half_heading_rad = w.half_deg * M_PI / 180.0;
+  req.has_reference = true;
+  req.reference = fromIsometry(k.truth);
   if (reg != nullptr) {
     const double c0 = cpuNow(), t0 = now();
     auto r = reg->match(raster, k.points, req, nullptr, now, &ours.stages);
@@ -77,6 +80,8 @@ void runPrior(const Registration* reg, const ChunkMap& raster, std::vector<Peer>
     ours.matched = r.ok();
     if (r.ok()) {
       ours.evaluations_fraction = r->search.stats.fraction();
+      ours.integrity = eval::integrityOf(*r);
+      ours.integrity.certificate_ms = 1e3 * ours.stages.certificate_s;
       poseErrors(toIsometry(r->pose), k.truth, ours);
       Trial discrete;
       poseErrors(toIsometry(r->search.pose), k.truth, discrete);

@@ -13,6 +13,7 @@
 
 #include "bench/bench_data.h"
 #include "bench/bench_peers.h"
+#include "evaluate/evaluate_results.h"
 #include "gmm_localization/core/matching/registration.h"
 #include "gmm_localization/core/raster/raster_options.h"
 #include "kitti_check/kitti_check_data.h"
@@ -70,6 +71,9 @@ struct Trial {
   double cpu_seconds = 0.0;           ///< process CPU time of the match (robust to a busy machine)
   RegistrationTiming stages;          ///< ours: time per stage (search_s: the search)
   double evaluations_fraction = 0.0;  ///< ours: node scores / exhaustive poses
+  /// ours: the certificate, protection level and the SLAM pose's score deficit (the truth as
+  /// MatchRequest::reference), as `evaluate` reports them (evaluate_integrity.h).
+  eval::IntegrityFields integrity;
   bool success() const { return matched && error_m < 0.5 && error_deg < 1.0; }
 };
 

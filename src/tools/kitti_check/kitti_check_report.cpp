@@ -5,6 +5,7 @@
 #include <set>
 
 #include "bench/bench_data.h"
+#include "evaluate/evaluate_integrity.h"
 
 namespace gmm_localization {
 namespace kitti_check {
@@ -89,6 +90,20 @@ void printStages(const std::vector<Trial>& trials, const std::string& w, std::FI
       median(f), median(s), median(h), median(c), median(o));
 }
 
+/// Ours' certificates in window w, as `evaluate` summarizes a drive's: availability, certified
+/// matches wrong beyond their protection level or the alert limit (hazardously misleading), the
+/// SLAM pose's score deficit. Matches without a result are not registrations.
+void printIntegrity(const std::vector<Trial>& trials, const std::string& w, std::FILE* out) {
+  eval::IntegritySummary s;
+  for (const Trial& t : trials) {
+    if (t.window == w && t.matcher == "ours" && t.matched) {
+      eval::addToIntegrity(t.integrity, t.error_m, s);
+    }
+  }
+  eval::finishIntegrity(s);
+  std::fprintf(out, "\n%s", eval::integrityMarkdown(s, "ours, " + w).c_str());
+}
+
 /// Ours' discrete optimum against its refined pose and against GICP from the same starts, per
 /// keyframe and window ("SLAM pose" included): median horizontal errors and how often the
 /// refinement ends at least as close to the SLAM pose as the discrete optimum (1 mm slack).
@@ -160,6 +175,7 @@ void printLooTables(const LooReport& r, std::FILE* out) {
       printRow(out, "**all**", "**" + m + "**", summarize(r.trials, -1, w, m));
     }
     printStages(r.trials, w, out);
+    printIntegrity(r.trials, w, out);
   }
   std::fprintf(out, "\n## Started at the SLAM pose (paper window for ours)\n\n");
   std::fprintf(out,
@@ -206,18 +222,22 @@ bool writeTrialsCsv(const LooReport& r, const std::string& path) {
       f,
       "keyframe,window,matcher,offset_m,offset_deg,matched,success,error_m,error_deg,"
       "error_z_m,error_long_m,error_lat_m,ms,cpu_ms,search_ms,evaluations_fraction,failure,"
-      "discrete_error_m,discrete_error_long_m,discrete_error_lat_m\n");
+      "discrete_error_m,discrete_error_long_m,discrete_error_lat_m,certified,"
+      "certificate_failure,protection_xy_m,truth_deficit_per_point\n");
   for (const Trial& t : r.trials) {
     std::string why = t.failure, window = t.window;
     std::replace(why.begin(), why.end(), ',', ';');
     std::replace(window.begin(), window.end(), ',', ';');
     std::fprintf(
         f,
-        "%d,%s,%s,%.4f,%.4f,%d,%d,%.5f,%.5f,%.5f,%.5f,%.5f,%.3f,%.3f,%.3f,%.6f,%s,%.5f,%.5f,%.5f\n",
+        "%d,%s,%s,%.4f,%.4f,%d,%d,%.5f,%.5f,%.5f,%.5f,%.5f,%.3f,%.3f,%.3f,%.6f,%s,%.5f,%.5f,%.5f,"
+        "%d,%s,%.4f,%.6f\n",
         t.keyframe, window.c_str(), t.matcher.c_str(), t.offset_m, t.offset_deg, t.matched ? 1 : 0,
         t.success() ? 1 : 0, t.error_m, t.error_deg, t.error_z_m, t.error_long_m, t.error_lat_m,
         1e3 * t.seconds, 1e3 * t.cpu_seconds, 1e3 * t.stages.search_s, t.evaluations_fraction,
-        why.c_str(), t.discrete_error_m, t.discrete_error_long_m, t.discrete_error_lat_m);
+        why.c_str(), t.discrete_error_m, t.discrete_error_long_m, t.discrete_error_lat_m,
+        t.integrity.certified ? 1 : 0, t.integrity.failure.c_str(), t.integrity.protection_xy_m,
+        t.integrity.truth_deficit_per_point);
   }
   return std::fclose(f) == 0;
 }

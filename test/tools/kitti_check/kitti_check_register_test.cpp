@@ -56,6 +56,13 @@ TEST(KittiCheckRegister, LeaveOneOutRecoversTheMiddleKeyframe) {
     ASSERT_TRUE(t.matched) << t.window << ": " << t.failure;
     EXPECT_LT(t.error_m, 0.1) << t.window << " from " << t.offset_m << " m";
     EXPECT_LT(t.error_deg, 0.2) << t.window << " from " << t.offset_deg << " deg";
+    // The integrity fields evaluate reports: a certified match lies within its protection
+    // level, and the SLAM pose (inside every window here) has its score deficit measured.
+    EXPECT_TRUE(t.integrity.valid) << t.window;
+    if (t.integrity.certified) {
+      EXPECT_LE(t.error_m, t.integrity.protection_xy_m) << t.window;
+    }
+    EXPECT_TRUE(std::isfinite(t.integrity.truth_deficit_per_point)) << t.window;
     // The discrete optimum is reported too: started at the SLAM pose the search's grid is
     // centred on it, so its optimum is that very cell; from an offset it lies on the 0.2 m grid
     // of the offset start, within a cell diagonal of the SLAM pose here.
