@@ -15,8 +15,8 @@
 #  - vehicle_bad_input:  localization.launch against the bad-input matrix (bad clouds, stamps,
 #                        NaN inputs, a rogue map index, broken map directories) while it drives;
 #  - vehicle_gnss_start: localization.launch gnss_initializer:=true started from GNSS fixes;
-#  - vehicle_global_start: replay.launch global_start:=true with no pose at all: the global
-#                        window swept over the map finds the vehicle;
+#  - vehicle_global_start: replay.launch with no pose at all (the global start runs by default):
+#                        the global window swept over the map finds the vehicle;
 #  - vehicle_external_filter: localization.launch ekf:=false prior_topic:=/odometry/filtered with
 #                        a stand-in for robot_localization (wiring, TF, config/robot_localization
 #                        .yaml), and vehicle_ekf_no_tf (same binary): ekf_publish_tf:=false;

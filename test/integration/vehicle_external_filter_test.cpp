@@ -155,9 +155,13 @@ TEST(VehicleExternalFilter, TheNodeletsAndTopicsAreWired) {
         loaded =
             std::set<std::string>(list.response.nodelets.begin(), list.response.nodelets.end());
         return loaded.count("/localization/matcher") && loaded.count("/localization/map_server") &&
-               (noEkf() || loaded.count("/localization/ekf"));
+               (noEkf() || loaded.count("/localization/ekf")) &&
+               loaded.count("/localization/global_start");
       },
-      30.0));
+      30.0))
+      << "nodelets loaded: " << loaded.size()
+      << " (the global start too: localization.launch loads it by default, with no pose "
+         "configured)";
   Graph g;
   const std::string prior = noEkf() ? "/odometry/filtered" : "/localization/odometry";
   ASSERT_TRUE(waitFor(
