@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
+#include <vector>
 
 namespace gmm_localization {
 
@@ -45,6 +47,30 @@ double& coord(Pose6& p, int a) {
 }
 }  // namespace
 
+namespace {
+/// The poses a climb has scored, bit for bit. The climb stands on the best of them, and a move
+/// needs a strictly higher score, so a trial that repeats one of them (the axes tried after the
+/// last move of a sweep, tried again from the same pose in the next sweep) cannot move it: it
+/// is passed over, not scored again, and the climb takes the same path.
+class ScoredPoses {
+ public:
+  bool seen(const Pose6& p) const {
+    const std::array<double, kAxes> c = coordinates(p);
+    for (const std::array<double, kAxes>& q : poses_) {
+      if (std::memcmp(q.data(), c.data(), sizeof(c)) == 0) return true;
+    }
+    return false;
+  }
+  void add(const Pose6& p) { poses_.push_back(coordinates(p)); }
+
+ private:
+  static std::array<double, kAxes> coordinates(const Pose6& p) {
+    return {p.x, p.y, p.z, p.roll, p.pitch, p.yaw};
+  }
+  std::vector<std::array<double, kAxes>> poses_;
+};
+}  // namespace
+
 /// One pattern search from `start`, constrained to the box around `centre`; `kept` (optional)
 /// is told each time the climb moves to the pose just scored.
 HillClimbOutcome climb(const std::function<double(const Pose6&)>& score,
@@ -63,6 +89,8 @@ HillClimbOutcome climb(const std::function<double(const Pose6&)>& score,
   out.score_start = out.score = score(start);
   if (kept) kept();
   out.evaluations = 1;
+  ScoredPoses scored;
+  scored.add(start);
   Pose6 start_copy = centre;
   bool any_step_left = true;
   while (any_step_left && out.evaluations < o.max_evaluations) {
@@ -75,8 +103,13 @@ HillClimbOutcome climb(const std::function<double(const Pose6&)>& score,
         const double origin = coord(start_copy, a);
         v += sign * step[a];
         if (std::abs(v - origin) > limit[a] + 1e-12) continue;
-        const double s = score(trial);
         ++out.evaluations;
+        if (scored.seen(trial)) {
+          ++out.repeated;  // scored already, at most the score the climb then stood on: no move
+          continue;
+        }
+        const double s = score(trial);
+        scored.add(trial);
         if (s > out.score) {
           out.score = s;
           out.pose = trial;
@@ -196,9 +229,13 @@ HillClimbOutcome hillClimb(const ClimbObjective& f, const Pose6& start, const Hi
   second.max_evaluations = std::max(1, o.max_evaluations - c.evaluations);
   HillClimbOutcome out = climb(f.full, f.full_kept, c.pose, start, second);
   out.evaluations += c.evaluations;
+  out.repeated += c.repeated;
   // The coarse climb's pose could score below the start on all points: never return worse.
-  out.score_start = f.full(start);
-  ++out.evaluations;
+  // (When the coarse climb stayed on the start, the full climb began by scoring it.)
+  if (std::memcmp(&c.pose, &start, sizeof(Pose6)) != 0) {
+    out.score_start = f.full(start);
+    ++out.evaluations;
+  }
   if (out.score_start > out.score) {
     out.pose = start;
     out.score = out.score_start;

@@ -39,8 +39,9 @@ struct HillClimbOutcome {
   Pose6 pose;
   double score_start = 0.0;  ///< exact log-likelihood at the start [nats]
   double score = 0.0;        ///< at the result [nats]
-  int evaluations = 0;
-  bool hit_limit = false;  ///< some coordinate ended on its constraint
+  int evaluations = 0;       ///< poses tried, the start included (the budget counts these)
+  int repeated = 0;          ///< ... of them a pose the same climb had scored: passed over unscored
+  bool hit_limit = false;    ///< some coordinate ended on its constraint
 };
 
 /// The pose objective of a climb [nats]: `full` on all points; `coarse` on the thinned ones of
