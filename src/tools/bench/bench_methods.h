@@ -44,6 +44,8 @@ struct WindowRow {
   std::vector<double> filter_ms, search_ms, filter_search_ms, total_ms, fraction, error_m,
       error_deg;
   std::vector<double> refine_ms, covariance_ms, obstacles_ms, certificate_ms;
+  /// The refinement's trials per match, and those of them passed over as repeats (unscored).
+  std::vector<double> refine_trials, refine_repeated;
   std::vector<double> points, lookups;     ///< search points per heading; evaluations x points
   int certified = 0, certified_wrong = 0;  ///< certified matches; of them outside success
   int success = 0, runs = 0, equal = 0, compared = 0, failures = 0;
