@@ -53,7 +53,8 @@ bool writeScanCsv(const std::vector<ScanRecord>& records, const std::string& pat
   std::ofstream f(path);
   f << "section,window,matcher,scan,raw_points,search_points,offset_m,offset_deg,matched,"
        "error_m,error_deg,success,certified,prepare_ms,search_ms,total_ms,"
-       "evaluations_fraction,equal_to_exhaustive,failure\n";
+       "evaluations_fraction,equal_to_exhaustive,failure,refine_ms,covariance_ms,certificate_ms,"
+       "obstacles_ms\n";
   for (const ScanRecord& r : records) {
     f << csvField(r.section) << ',' << csvField(r.window) << ',' << csvField(r.matcher) << ','
       << r.scan << ',' << number(r.raw_points) << ',' << measured(r.search_points) << ','
@@ -62,7 +63,8 @@ bool writeScanCsv(const std::vector<ScanRecord>& records, const std::string& pat
       << ',' << (r.success ? 1 : 0) << ',' << flag(r.certified) << ',' << measured(r.prepare_ms)
       << ',' << measured(r.search_ms) << ',' << measured(r.total_ms) << ','
       << measured(r.evaluations_fraction) << ',' << flag(r.equal_to_exhaustive) << ','
-      << csvField(r.failure) << '\n';
+      << csvField(r.failure) << ',' << measured(r.refine_ms) << ',' << measured(r.covariance_ms)
+      << ',' << measured(r.certificate_ms) << ',' << measured(r.obstacles_ms) << '\n';
   }
   f.close();
   return static_cast<bool>(f);

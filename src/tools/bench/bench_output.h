@@ -35,6 +35,8 @@ struct ScanRecord {
   double evaluations_fraction = -1.0;
   int equal_to_exhaustive = -1;  ///< -1: not compared
   std::string failure;
+  /// The stages after the search (the last columns; -1: not measured).
+  double refine_ms = -1.0, covariance_ms = -1.0, certificate_ms = -1.0, obstacles_ms = -1.0;
 };
 
 /// Writes the records as CSV (header line first); false on an I/O error.

@@ -153,6 +153,10 @@ bool matchInto(const Registration& reg, const ChunkMap& map, const BenchScan& s,
   rec.search_ms = row.search_ms.back();
   rec.total_ms = row.total_ms.back();
   rec.evaluations_fraction = bb.stats.fraction();
+  rec.refine_ms = row.refine_ms.back();
+  rec.covariance_ms = row.covariance_ms.back();
+  rec.certificate_ms = row.certificate_ms.back();
+  rec.obstacles_ms = row.obstacles_ms.back();
   if (!r.ok()) {
     ++row.failures;
     rec.failure = r.error();

@@ -172,7 +172,13 @@ TEST(BenchRegistration, RunsOnAKittiLayoutFolderWithAMissingScanAndACalibration)
   std::set<std::string> scan_ids;
   double largest_track_offset = 0.0;
   for (const auto& f : csvRows(csv)) {
-    ASSERT_EQ(f.size(), 19u) << csv;
+    ASSERT_EQ(f.size(), 23u) << csv;
+    if (f[0] == "window" && f[2] == "gmm_localization" && f[8] == "1") {
+      for (size_t k = 19; k < 23; ++k) {  // refine, covariance, certificate, obstacles [ms]
+        ASSERT_FALSE(f[k].empty()) << "column " << k << ": " << csv;
+        EXPECT_GE(std::stod(f[k]), 0.0) << "column " << k;
+      }
+    }
     const std::string key = f[0] + " / " + f[1].substr(0, f[1].find(':')) + " / " + f[2];
     ++count[key];
     ok[key] += f[11] == "1";
