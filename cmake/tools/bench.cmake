@@ -3,6 +3,7 @@
 # per-run output are the static library gmm_bench, shared with kitti_check.
 add_library(gmm_bench STATIC
   src/tools/bench/bench_data.cpp
+  src/tools/bench/bench_global_miss.cpp
   src/tools/bench/bench_methods.cpp
   src/tools/bench/bench_options.cpp
   src/tools/bench/bench_output.cpp

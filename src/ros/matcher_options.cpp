@@ -75,6 +75,8 @@ RegistrationOptions loadRegistrationOptions(const ParamSource& parent) {
       param(nh, "global/max_points", static_cast<int>(g.max_points), 0, 1000000));
   g.max_evaluations = static_cast<int64_t>(
       param(nh, "global/max_evaluations", static_cast<int>(g.max_evaluations), 0, 1000000000));
+  g.min_score_per_point =
+      param(nh, "global/min_score_per_point", g.min_score_per_point, -1000.0, 1000.0);
   g.confirm_half_xy_m = param(nh, "global/confirm_half_xy_m", g.confirm_half_xy_m, 0.01, 12.5);
   g.threads = param(nh, "global/threads", g.threads, 0, 64);
   g.confirm_half_heading_rad =

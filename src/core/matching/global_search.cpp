@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <limits>
 #include <queue>
 #include <string>
 #include <utility>
@@ -100,6 +101,10 @@ std::string GlobalSearchOptions::validate() const {
     return "typical_range_quantile must be in [0, 1]";
   }
   if (max_evaluations < 0) return "max_evaluations must be >= 0";
+  if (std::isnan(min_score_per_point) ||
+      min_score_per_point == std::numeric_limits<double>::infinity()) {
+    return "min_score_per_point must be a number or -inf (off)";
+  }
   if (queues < 0 || queues > 64) return "queues=" + std::to_string(queues) + " must be in [0, 64]";
   if (threads < 0 || threads > 64) {
     return "threads=" + std::to_string(threads) + " must be in [0, 64]";
@@ -239,6 +244,16 @@ struct QueueResult {
   std::vector<SearchOutcome::IntervalBound> bounds;  ///< every node bound it computed
 };
 
+/// min_score_per_point in score units for the problem's points, rounded up (a leaf below it
+/// scores below the floor per point); -1 when the floor is off (at or below the map's own, or
+/// a problem of two channels: the floor was measured on the height likelihood alone).
+int64_t floorScore(const SearchProblem& problem, double per_point) {
+  const ScoreQuantizer q(problem.map().options());
+  if (problem.numChannels() > 1 || !(per_point > q.floor())) return -1;
+  return static_cast<int64_t>(
+      std::ceil((per_point - q.floor()) / q.step() * static_cast<double>(problem.scanPoints())));
+}
+
 /// State the queues share: the best leaf score proven so far (the pruning threshold) and the
 /// node budget.
 struct SharedSearch {
@@ -343,6 +358,8 @@ GlobalSearchOutcome globalBranchAndBound(const SearchProblem& problem,
     shared.evaluations = 1;
     shared.incumbent = prior_score;
   }
+  const int64_t floor_score = floorScore(problem, options.min_score_per_point);
+  if (floor_score > shared.incumbent.load()) shared.incumbent = floor_score;
   // The queues share the best leaf score proven so far; each pops its own best-first and stops
   // when its best bound falls below it. The optimum: the best leaf over the queues, the
   // smallest key among equal scores (global_search.h), for any number of queues.
@@ -379,10 +396,11 @@ GlobalSearchOutcome globalBranchAndBound(const SearchProblem& problem,
     search_detail::sortByKey(all);
     return out;
   }
-  // Budget reached or cancelled (or, were a bound not admissible, nothing left): the prior, not
-  // an optimum.
+  // Budget reached or cancelled, or nothing reached the floor (or, were a bound not admissible,
+  // nothing left): the prior, not an optimum.
   out.complete = false;
   out.cancelled = shared.cancelled;
+  out.below_floor = best == nullptr && !shared.budget_hit && floor_score > prior_score;
   out.best = search_detail::makeOutcome(problem, w.half_h, w.half_x, w.half_y,
                                         std::max<int64_t>(prior_score, 0), std::move(stats));
   return out;

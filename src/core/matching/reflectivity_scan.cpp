@@ -1,6 +1,7 @@
 #include "gmm_localization/core/matching/reflectivity_scan.h"
 
 #include <cmath>
+#include <limits>
 
 #include <Eigen/Geometry>
 
@@ -36,6 +37,8 @@ RegistrationOptions reflectivityRegistrationOptions(const RegistrationOptions& h
   o.filter.min_height_m = -1.0;
   o.filter.max_height_m = 1000.0;
   o.filter.ground_share = 1.0;
+  // The global search's score floor was measured on the height likelihood: none here.
+  o.global.min_score_per_point = -std::numeric_limits<double>::infinity();
   return o;
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <climits>
 #include <cmath>
+#include <cstdio>
 
 #include <Eigen/Geometry>
 
@@ -167,8 +168,9 @@ RegistrationResult<MatchResult> Registration::match(const ChunkMap& map,
     return RegistrationResult<MatchResult>::failure(prepared.errorKind(), prepared.error());
   }
   const double t1 = tick();
-  bool complete = true, cancelled = false;
-  SearchOutcome best = search(prepared->problem, traversal, &complete, request.cancel, &cancelled);
+  bool complete = true, cancelled = false, below_floor = false;
+  SearchOutcome best =
+      search(prepared->problem, traversal, &complete, request.cancel, &cancelled, &below_floor);
   if (timing) {
     timing->filter_s = t1 - t0;
     timing->search_s = tick() - t1;
@@ -178,6 +180,16 @@ RegistrationResult<MatchResult> Registration::match(const ChunkMap& map,
         RegistrationError::kCancelled,
         "global search cancelled after " + std::to_string(best.stats.evaluations) +
             " node scores: a newer pose replaced the one it searched around");
+  }
+  if (below_floor) {
+    char floor[32];
+    std::snprintf(floor, sizeof(floor), "%.2f", options_.global.min_score_per_point);
+    return RegistrationResult<MatchResult>::failure(
+        RegistrationError::kBelowFloor,
+        std::string("no pose of the window scores the global search's floor of ") + floor +
+            " nats per point (global/min_score_per_point), proved after " +
+            std::to_string(best.stats.evaluations) +
+            " node scores: the vehicle is not in this window");
   }
   if (!complete) {
     return RegistrationResult<MatchResult>::failure(
@@ -192,9 +204,11 @@ RegistrationResult<MatchResult> Registration::match(const ChunkMap& map,
 
 SearchOutcome Registration::search(const SearchProblem& problem,
                                    std::vector<TraversalNode>* traversal, bool* complete,
-                                   const std::atomic<bool>* cancel, bool* cancelled) const {
+                                   const std::atomic<bool>* cancel, bool* cancelled,
+                                   bool* below_floor) const {
   if (complete != nullptr) *complete = true;
   if (cancelled != nullptr) *cancelled = false;
+  if (below_floor != nullptr) *below_floor = false;
   // Algorithm 2 (reference) or 3 over x, y, heading; wide heading ranges over intervals.
   if (options_.exhaustive) return exhaustiveSearch(problem);
   if (searchesGlobally(problem.window())) {
@@ -202,6 +216,7 @@ SearchOutcome Registration::search(const SearchProblem& problem,
         globalBranchAndBound(problem, options_.global, global_pool_.get(), cancel);
     if (complete != nullptr) *complete = g.complete;
     if (cancelled != nullptr) *cancelled = g.cancelled;
+    if (below_floor != nullptr) *below_floor = g.below_floor;
     return std::move(g.best);
   }
   return branchAndBoundSearch(problem, options_.branch_and_bound, traversal, pool_.get());

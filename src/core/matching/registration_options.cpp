@@ -57,6 +57,8 @@ const char* registrationErrorName(RegistrationError kind) {
       return "search_budget";
     case RegistrationError::kCancelled:
       return "cancelled";
+    case RegistrationError::kBelowFloor:
+      return "below_floor";
   }
   return "unknown";
 }

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <functional>
+#include <limits>
 #include <map>
 #include <type_traits>
 
@@ -83,6 +84,8 @@ const char* benchUsage() {
          "  --global-split-share S    heading-vs-translation split rule (default)\n"
          "  --global-threads N   threads of the global search (2)\n"
          "  --global-reads N     layer reads per point and node in the interval bound (default)\n"
+         "  --global-floor F     score floor of the global search [nats/pt] (registration "
+         "default), off: none\n"
          "  --no-global          skip the global-localization table\n"
          "  --no-sizes           skip the scan-size table\n"
          "  --no-memory-floor    skip measuring memory latency and bandwidth (256 MB, about 2 s)\n"
@@ -178,6 +181,17 @@ bool parseBenchOptions(int argc, char** argv, BenchOptions& o, bool& help) {
       {"--global-root-headings", integer(o.reg.global.root_heading_levels, 0)},
       {"--global-split-share", real(o.reg.global.heading_split_share, 0.0)},
       {"--global-reads", integer(o.reg.global.max_reads_per_point, 1)},
+      {"--global-floor",
+       [&o](const char* v) {
+         double f;
+         if (std::string(v) == "off") {
+           o.reg.global.min_score_per_point = -std::numeric_limits<double>::infinity();
+           return true;
+         }
+         if (!toDouble(v, f) || !std::isfinite(f)) return false;
+         o.reg.global.min_score_per_point = f;
+         return true;
+       }},
       {"--global-regions",
        [&o](const char* v) {
          o.global_regions_m.clear();

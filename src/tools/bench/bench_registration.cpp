@@ -20,6 +20,7 @@
 #include <thread>
 
 #include "bench/bench_data.h"
+#include "bench/bench_global_miss.h"
 #include "bench/bench_methods.h"
 #include "bench/bench_options.h"
 #include "bench/bench_output.h"
@@ -697,8 +698,9 @@ int main(int argc, char** argv) {
         "| region | loaded map | scans | poses per search (millions) | search ms median / max | "
         "match total ms median / max | evaluations (median) | evaluations x search points, "
         "millions (median) "
-        "| success <0.5 m, <1 deg | certified, both proofs (of them wrong) |\n");
-    out.print("|---|---|---|---|---|---|---|---|---|---|\n");
+        "| success <0.5 m, <1 deg | certified, both proofs (of them wrong) | optimum nats/pt "
+        "(lowest) |\n");
+    out.print("|---|---|---|---|---|---|---|---|---|---|---|\n");
     std::vector<BenchScan> first(scans->begin(),
                                  scans->begin() + std::min<size_t>(scans->size(), o.global_count));
     const double largest = *std::max_element(o.global_regions_m.begin(), o.global_regions_m.end());
@@ -723,7 +725,7 @@ int main(int argc, char** argv) {
         const std::string name = fmt("%.0f m x %.0f m x 360 deg", 2 * half, 2 * half) +
                                  (extra_m > 0.0 ? " (map radius +100 m)" : "");
         const Registration reg(o.reg, global_pool);  // the rest of the match on the same threads
-        std::vector<double> search_ms, total_ms, evals, lookups;
+        std::vector<double> search_ms, total_ms, evals, lookups, optimum_per_point;
         int ok = 0, runs = 0, certified = 0, certified_wrong = 0;
         double poses = 0.0;
         for (size_t i = 0; i < first.size(); ++i) {
@@ -753,6 +755,12 @@ int main(int argc, char** argv) {
           const double t2 = now();
           search_ms.push_back((t2 - t1) * 1e3);
           evals.push_back(static_cast<double>(g.best.stats.evaluations));
+          if (g.complete) {
+            const int64_t n = prepared->problem.scanPoints();
+            optimum_per_point.push_back(
+                ScoreQuantizer(gmap->options()).sumToLogLikelihood(g.best.score, n) /
+                static_cast<double>(n));
+          }
           lookups.push_back(static_cast<double>(g.point_lookups));
           poses = static_cast<double>(g.best.stats.exhaustive_poses);
           rec.prepare_ms = (t1 - t0) * 1e3;
@@ -760,7 +768,8 @@ int main(int argc, char** argv) {
           std::fprintf(stderr,
                        "global %.0f m scan %d: %s, %.0f ms, %lld evaluations, %lld heading / %lld "
                        "translation splits, %.1f M lookups, queue peak %lld\n",
-                       2 * half, first[i].index, g.complete ? "complete" : "budget",
+                       2 * half, first[i].index,
+                       g.complete ? "complete" : (g.below_floor ? "below the floor" : "budget"),
                        (t2 - t1) * 1e3, static_cast<long long>(g.best.stats.evaluations),
                        static_cast<long long>(g.heading_splits),
                        static_cast<long long>(g.translation_splits), g.point_lookups / 1e6,
@@ -768,7 +777,8 @@ int main(int argc, char** argv) {
           if (!g.complete) {
             total_ms.push_back((now() - t0) * 1e3);
             rec.total_ms = total_ms.back();
-            rec.failure = "global search stopped at its budget";
+            rec.failure = g.below_floor ? "no pose reaches the global search's score floor"
+                                        : "global search stopped at its budget";
             records.push_back(rec);
             continue;
           }
@@ -806,11 +816,11 @@ int main(int argc, char** argv) {
         }
         out.print(
             "| %.0f m x %.0f m x 360 deg | %zu chunks, %.0f MB (radius %.0f m) | %d | %.1f | %.0f "
-            "/ %.0f | %.0f / %.0f | %.0f | %.1f | %d/%d | %d/%d (%d) |\n",
+            "/ %.0f | %.0f / %.0f | %.0f | %.1f | %d/%d | %d/%d (%d) | %.2f |\n",
             2 * half, 2 * half, gs.chunks, gs.bytes / 1e6, radius, runs, poses / 1e6,
             median(search_ms), percentile(search_ms, 100), median(total_ms),
             percentile(total_ms, 100), median(evals), median(lookups) / 1e6, ok, runs, certified,
-            runs, certified_wrong);
+            runs, certified_wrong, percentile(optimum_per_point, 0));
         JsonObject g;
         g.add("name", name)
             .add("region_m", 2 * half)
@@ -823,11 +833,14 @@ int main(int argc, char** argv) {
             .add("search_ms_median", median(search_ms))
             .add("search_ms_max", percentile(search_ms, 100))
             .add("match_total_ms_median", median(total_ms))
-            .add("evaluations_median", median(evals));
+            .add("evaluations_median", median(evals))
+            .add("optimum_per_point_lowest", percentile(optimum_per_point, 0));
         global_json.push_back(g);
       }
     }
     summary.add("global", global_json);
+    summary.add("global_miss",
+                benchGlobalMiss(out, store.value(), first, o, global_pool, &records));
   }
 
   if (with_peers) {

@@ -145,6 +145,8 @@ TEST_F(ReflectivityMatchTest, BranchAndBoundEqualsTheExhaustiveSearchOnReflectiv
   std::mt19937 rng(77);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   RegistrationOptions bnb = reflectivityRegistrationOptions(RegistrationOptions());
+  // The global search's score floor is the height likelihood's: none for reflectivity.
+  EXPECT_FALSE(bnb.global.min_score_per_point > -1e300);
   RegistrationOptions exhaustive = bnb;
   exhaustive.exhaustive = true;
   for (int c = 0; c < 8; ++c) {

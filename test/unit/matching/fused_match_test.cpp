@@ -248,6 +248,11 @@ TEST_F(FusedMatchTest, BranchAndBoundAndIntervalSearchEqualTheExhaustiveSearch) 
     const GlobalSearchOutcome g = globalBranchAndBound(prepared->problem, global);
     ASSERT_TRUE(g.complete);
     testing::expectSame(g.best, exhaustiveSearch(prepared->problem), c);
+    // The score floor is the height likelihood's: off for two channels, however high it is set.
+    global.min_score_per_point = 100.0;
+    const GlobalSearchOutcome floored = globalBranchAndBound(prepared->problem, global);
+    EXPECT_TRUE(floored.complete && !floored.below_floor) << "case " << c;
+    EXPECT_EQ(floored.best.score, g.best.score) << "case " << c;
   }
 }
 

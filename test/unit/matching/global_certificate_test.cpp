@@ -69,7 +69,7 @@ TEST(GlobalCertificate, EqualsBruteForceOnRandomCases) {
     const PointList pts = testing::randomPoints(rng, 20 + static_cast<int>(150 * u(rng)), 5.0);
     auto problem = SearchProblem::create(chunks, pts, w);
     if (!problem.ok()) continue;
-    GlobalSearchOptions go;
+    GlobalSearchOptions go = testing::withoutScoreFloor();
     go.root_heading_levels = c % 6;
     go.queues = c % 3;  // 0: one per thread of the pool (or one)
     GlobalSearchOutcome g = globalBranchAndBound(problem.value(), go);
@@ -155,13 +155,15 @@ TEST(GlobalCertificate, HeadingsAcrossTheSeamAreNeighbours) {
     SearchWindow w = testing::fullTurnWindow(rng, 10.0);
     auto problem = SearchProblem::create(chunks, pts, w);
     if (!problem.ok()) continue;
-    const GlobalSearchOutcome first = globalBranchAndBound(problem.value());
+    const GlobalSearchOutcome first =
+        globalBranchAndBound(problem.value(), testing::withoutScoreFloor());
     Pose6 prior = w.prior;
     prior.yaw = first.best.pose.yaw + (c % 2 == 0 ? -3.15 : 3.15);
     w = SearchWindow::fromExtent(prior, w.half_x * 0.2, w.half_y * 0.2, 3.1416, 0.1, 0.2);
     problem = SearchProblem::create(chunks, pts, w);
     ASSERT_TRUE(problem.ok());
-    const GlobalSearchOutcome g = globalBranchAndBound(problem.value());
+    const GlobalSearchOutcome g =
+        globalBranchAndBound(problem.value(), testing::withoutScoreFloor());
     CertificateOptions co;
     co.margin_per_point = 0.0;
     co.exclusion_heading_rad = 0.2;
@@ -185,7 +187,8 @@ TEST(GlobalCertificate, ABudgetTooSmallNeverCertifiesWhatBruteForceRejects) {
     const SearchWindow w = testing::fullTurnWindow(rng, 10.0);
     auto problem = SearchProblem::create(chunks, testing::randomPoints(rng, 100, 5.0), w);
     if (!problem.ok()) continue;
-    const GlobalSearchOutcome g = globalBranchAndBound(problem.value());
+    const GlobalSearchOutcome g =
+        globalBranchAndBound(problem.value(), testing::withoutScoreFloor());
     CertificateOptions co;
     co.margin_per_point = 0.2;
     co.global_max_evaluations = 1 + c * 20;
@@ -206,7 +209,8 @@ TEST(GlobalCertificate, ACancelFlagStopsTheProofUncertifiedAndSaysSo) {
     auto problem = SearchProblem::create(chunks, testing::randomPoints(rng, 100, 5.0), w);
     if (!problem.ok()) continue;
     ++cases;
-    const GlobalSearchOutcome g = globalBranchAndBound(problem.value());
+    const GlobalSearchOutcome g =
+        globalBranchAndBound(problem.value(), testing::withoutScoreFloor());
     const MatchCertificate full = certifyGlobalOptimum(problem.value(), g.best, {}, {});
     std::atomic<bool> cancel{false};
     bool cancelled = true;
@@ -236,8 +240,9 @@ TEST(GlobalCertificate, DisabledReportsDisabled) {
   ASSERT_TRUE(problem.ok());
   CertificateOptions co;
   co.enabled = false;
-  const MatchCertificate cert =
-      certifyGlobalOptimum(problem.value(), globalBranchAndBound(problem.value()).best, co, {});
+  const MatchCertificate cert = certifyGlobalOptimum(
+      problem.value(), globalBranchAndBound(problem.value(), testing::withoutScoreFloor()).best, co,
+      {});
   EXPECT_FALSE(cert.certified);
   EXPECT_EQ(CertificateFailure::kDisabled, cert.failure);
 }

@@ -1,7 +1,8 @@
 // The global branch-and-bound over heading intervals equals the exhaustive search (pose and
 // score, ties included) on seeded random cases over the full turn, also with chunks missing and
-// root blocks coarser than the map's coarsest layer; and every interval bound is at least the
-// best leaf below it (brute force).
+// root blocks coarser than the map's coarsest layer; a score floor keeps that optimum when it
+// reaches the floor and proves that nothing does otherwise; and every interval bound is at least
+// the best leaf below it (brute force).
 
 #include "gmm_localization/core/matching/global_search.h"
 
@@ -9,6 +10,7 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -19,6 +21,9 @@ namespace gmm_localization {
 namespace {
 
 using testing::fullTurnWindow;
+
+/// The score floor off (testing::withoutScoreFloor).
+constexpr double kFloorOff = -std::numeric_limits<double>::infinity();
 
 /// Brute force: the best exact score of the leaves of node (j0, hl, layer, tx, ty).
 int64_t bestLeaf(const SearchProblem& problem, int j0, int hl, int layer, int tx, int ty) {
@@ -61,6 +66,7 @@ TEST(GlobalSearch, EqualsExhaustiveOverTheFullTurnOnRandomCases) {
       if (!problem.ok()) continue;  // every chunk under this window dropped
       const SearchOutcome ex = exhaustiveSearch(problem.value());
       GlobalSearchOptions go;
+      go.min_score_per_point = kFloorOff;  // the optimum however low (the floor: below)
       go.root_heading_levels = c % 6;
       go.root_layer = c % 4 == 1 ? 6 : -1;  // 6 > num_layers: several reads per point
       go.prior_as_incumbent = (c % 2) == 0;
@@ -87,9 +93,11 @@ TEST(GlobalSearch, OnAPoolTheSameOptimumAsOneQueue) {
     if (!problem.ok()) continue;
     GlobalSearchOptions one;
     one.queues = 1;
+    one.min_score_per_point = kFloorOff;
     const GlobalSearchOutcome a = globalBranchAndBound(problem.value(), one);
     ASSERT_TRUE(a.complete) << "case " << c;
     GlobalSearchOptions per_thread;  // queues 0: one per thread of the pool
+    per_thread.min_score_per_point = kFloorOff;
     per_thread.root_layer = c % 2 == 0 ? 2 : -1;
     const GlobalSearchOutcome b = globalBranchAndBound(problem.value(), per_thread, &pool);
     expectSame(a.best, b, c);
@@ -119,6 +127,7 @@ TEST(GlobalSearch, EqualScoresInSeveralQueuesGiveTheExhaustiveTieBreak) {
     tied += best_count > 1;
     for (int queues : {2, 3, 5}) {
       GlobalSearchOptions go;
+      go.min_score_per_point = kFloorOff;
       go.queues = queues;
       go.root_heading_levels = 2;
       go.root_layer = 2;  // many roots, so that equal leaves fall in different queues
@@ -128,6 +137,69 @@ TEST(GlobalSearch, EqualScoresInSeveralQueuesGiveTheExhaustiveTieBreak) {
   }
   EXPECT_GE(cases, 90);
   EXPECT_GE(tied, 20);  // the case this test is about
+}
+
+TEST(GlobalSearch, AScoreFloorKeepsTheOptimumItReachesAndProvesTheOneItDoesNot) {
+  // Floors just below, at, just above and well above the exhaustive optimum (in score units,
+  // converted to nats per point as a user sets it): at or below it, the same optimum, ties
+  // included; above it, no optimum and `below_floor`, never a budget stop. On one thread (the
+  // node counts of parallel queues depend on timing), never more node scores than without a
+  // floor, and fewer in all when the floor is well above the optimum.
+  TaskPool pool(2);
+  const ChunkMap chunks = testing::smallRandomChunks(13, 0.8);
+  const ScoreQuantizer q(chunks.options());
+  std::mt19937 rng(41);
+  int cases = 0, below = 0;
+  int64_t far_above = 0, far_above_without = 0;
+  for (int c = 0; c < 16; ++c) {
+    const SearchWindow w = fullTurnWindow(rng, 10.0);
+    auto problem = SearchProblem::create(chunks, testing::randomPoints(rng, 30 + 10 * c, 5.0), w);
+    if (!problem.ok()) continue;
+    const SearchOutcome ex = exhaustiveSearch(problem.value());
+    GlobalSearchOptions off;
+    off.min_score_per_point = kFloorOff;
+    off.queues = 1 + c % 3;
+    off.prior_as_incumbent = c % 2 == 0;
+    const GlobalSearchOutcome no_floor = globalBranchAndBound(problem.value(), off);
+    expectSame(ex, no_floor, c);
+    const bool parallel = c % 2 == 0;
+    const double n = static_cast<double>(problem->scanPoints());
+    for (double offset : {-5.5, -0.5, 0.5, 5.5}) {
+      GlobalSearchOptions go = off;
+      // ceil(ex.score + offset) score units: ex.score - 5, ex.score, ex.score + 1, + 6.
+      go.min_score_per_point = q.floor() + (static_cast<double>(ex.score) + offset) * q.step() / n;
+      ASSERT_TRUE(go.validate().empty()) << go.validate();
+      const GlobalSearchOutcome g =
+          globalBranchAndBound(problem.value(), go, parallel ? &pool : nullptr);
+      const int k = c * 10 + static_cast<int>(offset + 6.0);
+      if (offset < 0.0) {
+        expectSame(ex, g, k);
+        EXPECT_FALSE(g.below_floor) << "case " << k;
+      } else {
+        EXPECT_FALSE(g.complete) << "case " << k;
+        EXPECT_TRUE(g.below_floor) << "case " << k;
+        EXPECT_FALSE(g.cancelled) << "case " << k;
+        EXPECT_EQ(g.best.heading_index, w.half_h) << "case " << k;  // the prior, not an optimum
+        ++below;
+      }
+      if (!parallel) {
+        EXPECT_LE(g.best.stats.evaluations, no_floor.best.stats.evaluations) << "case " << k;
+        if (offset > 5.0) {
+          far_above += g.best.stats.evaluations;
+          far_above_without += no_floor.best.stats.evaluations;
+        }
+      }
+      ++cases;
+    }
+  }
+  EXPECT_GE(cases, 48);
+  EXPECT_GE(below, 24);
+  EXPECT_LT(far_above, far_above_without);
+  GlobalSearchOptions bad;
+  bad.min_score_per_point = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(bad.validate().empty());
+  bad.min_score_per_point = std::numeric_limits<double>::infinity();
+  EXPECT_FALSE(bad.validate().empty());
 }
 
 TEST(GlobalSearch, IntervalBoundIsAtLeastEveryLeafBelowIt) {
@@ -225,9 +297,11 @@ TEST(GlobalSearch, BudgetStopsWithoutClaimingAnOptimum) {
   auto& problem = k.problem;
   ASSERT_TRUE(problem.ok()) << problem.error();
   GlobalSearchOptions go;
+  go.min_score_per_point = kFloorOff;
   go.max_evaluations = 5;
   const GlobalSearchOutcome g = globalBranchAndBound(problem.value(), go);
   EXPECT_FALSE(g.complete);
+  EXPECT_FALSE(g.below_floor);
   EXPECT_EQ(g.best.heading_index, w.half_h);  // the prior, reported as such
   EXPECT_TRUE(go.validate().empty());
   go.root_heading_levels = 40;
@@ -239,18 +313,21 @@ TEST(GlobalSearch, ACancelFlagStopsItAsItsBudgetWouldAndSaysSo) {
   const SearchWindow& w = k.w;
   auto& problem = k.problem;
   ASSERT_TRUE(problem.ok()) << problem.error();
-  const GlobalSearchOutcome full = globalBranchAndBound(problem.value());
+  GlobalSearchOptions go;
+  go.min_score_per_point = kFloorOff;  // random points: far below a real scan's optimum
+  const GlobalSearchOutcome full = globalBranchAndBound(problem.value(), go);
   ASSERT_TRUE(full.complete);
   EXPECT_FALSE(full.cancelled);
   std::atomic<bool> cancel{false};
-  const GlobalSearchOutcome unset = globalBranchAndBound(problem.value(), {}, nullptr, &cancel);
+  const GlobalSearchOutcome unset = globalBranchAndBound(problem.value(), go, nullptr, &cancel);
   EXPECT_TRUE(unset.complete);  // a flag never set changes nothing
   EXPECT_EQ(unset.best.score, full.best.score);
   EXPECT_EQ(unset.best.stats.evaluations, full.best.stats.evaluations);
   cancel = true;
-  const GlobalSearchOutcome g = globalBranchAndBound(problem.value(), {}, nullptr, &cancel);
+  const GlobalSearchOutcome g = globalBranchAndBound(problem.value(), go, nullptr, &cancel);
   EXPECT_FALSE(g.complete);
   EXPECT_TRUE(g.cancelled);
+  EXPECT_FALSE(g.below_floor);
   EXPECT_EQ(g.best.heading_index, w.half_h);  // the prior, not an optimum
   EXPECT_LT(g.best.stats.evaluations, full.best.stats.evaluations);
 }

@@ -117,6 +117,17 @@ TEST_F(RegistrationErrorTest, EachFailureHasItsKindAndItsMessage) {
   global.cancel = nullptr;
   const auto budget = Registration(tiny).match(*chunks_, scan_, global);
   EXPECT_EQ(budget.errorKind(), RegistrationError::kSearchBudget) << budget.error();
+  // A score floor no pose can reach (above the map's ceiling): proved, and said, not a budget.
+  RegistrationOptions high;
+  high.global.min_score_per_point = 100.0;
+  const auto below = Registration(high).match(*chunks_, scan_, global);
+  EXPECT_EQ(below.errorKind(), RegistrationError::kBelowFloor) << below.error();
+  EXPECT_EQ(below.error().rfind("no pose of the window scores the global search's floor of "
+                                "100.00 nats per point",
+                                0),
+            0u)
+      << below.error();
+  EXPECT_STREQ(registrationErrorName(RegistrationError::kBelowFloor), "below_floor");
   EXPECT_STREQ(registrationErrorName(RegistrationError::kCancelled), "cancelled");
 
   // The kind survives a conversion to the plain Result (the message does).

@@ -3,8 +3,10 @@
 // random maps and random full-turn windows over them.
 
 #include <cstdint>
+#include <limits>
 #include <random>
 
+#include "gmm_localization/core/matching/global_search.h"
 #include "gmm_localization/core/matching/grid_search.h"
 #include "support/random_chunk_map.h"
 #include "support/random_map.h"
@@ -34,6 +36,13 @@ inline SearchWindow fullTurnWindow(std::mt19937& rng, double xy) {
   prior.z = u(rng);
   prior.yaw = 6.28 * u(rng);
   return SearchWindow::fromExtent(prior, 0.6 + 1.6 * u(rng), 0.6 + 1.6 * u(rng), 3.1416, 0.1, 0.2);
+}
+
+/// Global search options without a score floor: random points on these maps score far below
+/// the optimum of a real scan in its map, which the default floor is set for.
+inline GlobalSearchOptions withoutScoreFloor(GlobalSearchOptions o = GlobalSearchOptions()) {
+  o.min_score_per_point = -std::numeric_limits<double>::infinity();
+  return o;
 }
 
 }  // namespace testing

@@ -41,6 +41,15 @@
 // key, which it cannot hold; the best leaf over the queues, smallest key among equal scores, is
 // therefore the exhaustive optimum, on any number of threads and in any timing.
 //
+// A score floor. With min_score_per_point above the map's floor, the shared incumbent starts
+// at the larger of the prior's score and that floor times the scan's points (in score units,
+// rounded up). When the optimum reaches the floor the incumbent never exceeds it, so the argument
+// above holds unchanged: the same optimum, ties included, with fewer nodes queued. When it does
+// not, no leaf reaches the incumbent, the queues run dry without popping one, and the outcome
+// says `below_floor`: proved, not guessed, that no pose of the window scores the floor (a window
+// that does not hold the vehicle, which without the floor would be searched to its optimum or
+// its budget).
+//
 // Verified against exhaustiveSearch on small randomized cases, and the bound against the max over
 // its leaves, in test/unit/matching/global_search_test.cpp.
 
@@ -73,6 +82,14 @@ struct GlobalSearchOptions {
   /// town took 11k-107k node scores of 200 points (docs/benchmarks.md); 200000 of them, a few
   /// seconds on one core.
   int64_t max_evaluations = 200000;
+  /// Score floor [nats per search point]: a window whose optimum scores below it is reported
+  /// `below_floor` as soon as that is proved, instead of being searched to its optimum or its
+  /// budget. At or below the map's ll_floor (-6 by default; -inf too): off. -4.5: the search
+  /// optima of right matches scored -1.1 to -3.5 per point in the benchmarks (simulated clear,
+  /// real KITTI, each real keyframe against a map of the others), windows without the vehicle
+  /// -5.5 to -6 (docs/benchmarks.md). The height likelihood only: off for a problem of two
+  /// channels (the fused method) and in reflectivityRegistrationOptions.
+  double min_score_per_point = -4.5;
   /// Search points of a wide-heading search (Registration thins the filtered scan's search
   /// points evenly to this many; 0: all). The optimum is exact for the points searched; the
   /// refinement still uses every voxel. The node count hardly depends on it, the time per node
@@ -105,6 +122,9 @@ struct GlobalSearchOutcome {
   SearchOutcome best;      ///< the optimum (when complete) with the search statistics
   bool complete = true;    ///< false when max_evaluations stopped the search first
   bool cancelled = false;  ///< ... or when the caller's cancel flag did (complete false too)
+  /// Proved that no pose of the window scores min_score_per_point (complete false, the prior
+  /// reported as in a budget stop: there is no optimum worth the name here).
+  bool below_floor = false;
   int64_t heading_splits = 0;
   int64_t translation_splits = 0;
   int64_t point_lookups = 0;  ///< table reads of the interval bounds

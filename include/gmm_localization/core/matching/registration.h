@@ -139,6 +139,8 @@ enum class RegistrationError {
   kNumerical,       ///< non-finite pose or covariance
   kSearchBudget,    ///< the interval search reached GlobalSearchOptions::max_evaluations
   kCancelled,       ///< the interval search or its certificate was stopped by MatchRequest::cancel
+  kBelowFloor,      ///< no pose of the interval search's window reaches its score floor
+                    ///< (GlobalSearchOptions::min_score_per_point): the vehicle is not there
 };
 const char* registrationErrorName(RegistrationError kind);  ///< "no_points", "off_map", ...
 
@@ -199,10 +201,11 @@ class Registration {
   /// The search stage of match(): exhaustive (options().exhaustive), over heading intervals
   /// (windows of interval_search_min_headings headings or more) or branchAndBoundSearch.
   /// `complete` is false only when the interval search stopped at its node budget or at
-  /// `cancel` (then `cancelled` is true).
+  /// `cancel` (then `cancelled` is true), or proved that nothing reaches its score floor (then
+  /// `below_floor` is true).
   SearchOutcome search(const SearchProblem& problem, std::vector<TraversalNode>* traversal,
                        bool* complete = nullptr, const std::atomic<bool>* cancel = nullptr,
-                       bool* cancelled = nullptr) const;
+                       bool* cancelled = nullptr, bool* below_floor = nullptr) const;
   /// Refinement, covariance, certificate, coverage check and obstacles after a search of
   /// `prepared`; after a global search, first its certificate and the confirming search
   /// (MatchResult::global).
