@@ -85,10 +85,11 @@ struct GlobalSearchOptions {
   /// Score floor [nats per search point]: a window whose optimum scores below it is reported
   /// `below_floor` as soon as that is proved, instead of being searched to its optimum or its
   /// budget. At or below the map's ll_floor (-6 by default; -inf too): off. -4.5: the search
-  /// optima of right matches scored -1.1 to -3.5 per point in the benchmarks (simulated clear,
-  /// real KITTI, each real keyframe against a map of the others), windows without the vehicle
-  /// -5.5 to -6 (docs/benchmarks.md). The height likelihood only: off for a problem of two
-  /// channels (the fused method) and in reflectivityRegistrationOptions.
+  /// optima of right matches scored -1.1 to -3.8 per point in the benchmarks (simulated clear,
+  /// simulated snow on an aged map, real KITTI, each real keyframe against a map of the others),
+  /// the complete searches of windows without the vehicle -5.6 to -5.8 (docs/benchmarks.md). The
+  /// height likelihood only: off for a problem of two channels (the fused method) and in
+  /// reflectivityRegistrationOptions.
   double min_score_per_point = -4.5;
   /// Search points of a wide-heading search (Registration thins the filtered scan's search
   /// points evenly to this many; 0: all). The optimum is exact for the points searched; the
