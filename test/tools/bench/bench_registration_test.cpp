@@ -4,7 +4,8 @@
 // poses.txt with a calib.txt, and one pose whose scan is missing. The map is built by
 // build_map --kitti-calib from the same folder; the benchmark must skip the missing scan,
 // read the calibration with build_map's meaning (else its truth and the map disagree and the
-// matches fail), take the tracking offsets given, and write its per-run files.
+// matches fail), take the tracking offsets given, count every global search (windows with the
+// vehicle and without it, with the score floor and without) and write its per-run files.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
@@ -142,7 +143,8 @@ TEST(BenchRegistration, RunsOnAKittiLayoutFolderWithAMissingScanAndACalibration)
                             " --mapping " + seq + " --kitti-calib " + seq +
                             "/calib.txt --count 0 --peer-count 4 --peer-target-stride 1"
                             " --peer-target-exclude 0 --exhaustive-every 0 --no-sizes"
-                            " --no-global --track-offset-m 1 --track-offset-deg 2 --threads 2"
+                            " --global-count 2 --global-regions 10 --global-budget 20000"
+                            " --track-offset-m 1 --track-offset-deg 2 --threads 2"
                             " --out " +
                             out;
   ASSERT_EQ(run(bench, log), 0) << slurp(log + ".err");
@@ -199,9 +201,27 @@ TEST(BenchRegistration, RunsOnAKittiLayoutFolderWithAMissingScanAndACalibration)
   EXPECT_EQ(count["peers / tracking / PCL GICP"], 4);
   EXPECT_EQ(ok["window / paper / gmm_localization"], 4) << csv;
   EXPECT_EQ(ok["window / tracking / gmm_localization"], 4) << csv;
+  // The global rows (a 10 m square, the map as loaded and 100 m wider) on the first two scans,
+  // and the same square centred 10 m from the vehicle with the score floor and without it:
+  // every search counted in one of its three outcomes.
+  EXPECT_EQ(count["global / 10 m x 10 m x 360 deg / gmm_localization"], 2) << csv;
+  EXPECT_EQ(count["global / 10 m x 10 m x 360 deg (map radius +100 m) / gmm_localization"], 2);
+  EXPECT_EQ(count["global miss / floor -4.50 / gmm_localization"], 2) << csv;
+  EXPECT_EQ(count["global miss / floor off / gmm_localization"], 2) << csv;
+  EXPECT_NE(stdout_text.find("## Global search where the vehicle is not (10 m x 10 m x 360 deg, "
+                             "centre 10 m from it, budget 20000 node scores)"),
+            std::string::npos)
+      << stdout_text;
+  EXPECT_NE(stdout_text.find("| -4.50 | 2 | "), std::string::npos) << stdout_text;
+  EXPECT_NE(stdout_text.find("| off | 2 | 0 | "), std::string::npos) << stdout_text;
   const std::string json = slurp(out + "/summary.json");
   EXPECT_NE(json.find("\"skipped_without_file\": 1"), std::string::npos) << json;
   EXPECT_NE(json.find("\"skipped\": [3]"), std::string::npos);
   EXPECT_NE(json.find("\"offset_m\": 1,"), std::string::npos);
   EXPECT_NE(json.find("\"identical_results\": 4, \"compared\": 4"), std::string::npos) << json;
+  EXPECT_NE(json.find("{\"region_m\": 10, \"score_floor_per_point\": -4.5, \"budget\": 20000, "
+                      "\"scans\": 2,"),
+            std::string::npos)
+      << json;
+  EXPECT_NE(json.find("{\"region_m\": 10, \"score_floor_per_point\": null,"), std::string::npos);
 }
