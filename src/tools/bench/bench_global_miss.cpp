@@ -21,6 +21,12 @@ double seconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
+std::string twoDecimals(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.2f", v);
+  return buf;
+}
+
 /// How the searches of one row ended.
 struct MissRow {
   int scans = 0, below_floor = 0, budget = 0, found = 0;
@@ -71,8 +77,13 @@ std::vector<JsonObject> benchGlobalMiss(Report& out, const MapStore& store,
       "| score floor [nats/pt] | scans | proved below the floor | budget stops | optimum found "
       "(best nats/pt) | search ms median / max | evaluations (median) |\n");
   out.print("|---|---|---|---|---|---|---|\n");
-  for (double floor :
-       {o.reg.global.min_score_per_point, -std::numeric_limits<double>::infinity()}) {
+  // The configured floor (when it is on), then none.
+  std::vector<double> floors;
+  if (o.reg.global.min_score_per_point > q.floor()) {
+    floors.push_back(o.reg.global.min_score_per_point);
+  }
+  floors.push_back(-std::numeric_limits<double>::infinity());
+  for (double floor : floors) {
     GlobalSearchOptions go = o.reg.global;
     go.max_evaluations = budget;
     go.min_score_per_point = floor;
@@ -80,7 +91,7 @@ std::vector<JsonObject> benchGlobalMiss(Report& out, const MapStore& store,
     ro.global = go;
     const Registration reg(ro, pool);
     const bool on = floor > q.floor();
-    const std::string name = on ? "floor " + std::to_string(floor).substr(0, 5) : "floor off";
+    const std::string name = on ? "floor " + twoDecimals(floor) : "floor off";
     MissRow row;
     for (size_t i = 0; i < scans.size(); ++i) {
       MatchRequest req;
@@ -125,13 +136,12 @@ std::vector<JsonObject> benchGlobalMiss(Report& out, const MapStore& store,
                    static_cast<long long>(g.best.stats.evaluations));
       records->push_back(rec);
     }
-    const std::string found = row.found > 0
-                                  ? std::to_string(row.found) + " (" +
-                                        std::to_string(row.best_found_per_point).substr(0, 5) + ")"
-                                  : "0";
+    const std::string found = row.found > 0 ? std::to_string(row.found) + " (" +
+                                                  twoDecimals(row.best_found_per_point) + ")"
+                                            : "0";
     out.print("| %s | %d | %d | %d | %s | %.0f / %.0f | %.0f |\n",
-              on ? std::to_string(floor).substr(0, 5).c_str() : "off", row.scans, row.below_floor,
-              row.budget, found.c_str(), median(row.search_ms), percentile(row.search_ms, 100),
+              on ? twoDecimals(floor).c_str() : "off", row.scans, row.below_floor, row.budget,
+              found.c_str(), median(row.search_ms), percentile(row.search_ms, 100),
               median(row.evaluations));
     JsonObject j;
     j.add("region_m", edge)

@@ -17,7 +17,7 @@ namespace bench {
 
 /// For the largest of o.global_regions_m: each scan's window centred `edge` metres from its
 /// truth in a seeded random direction (so the vehicle is outside the square), any heading;
-/// searched once with the configured floor and once without, at the configured node budget (or
+/// searched with the configured floor (when it is on) and without one, at the node budget (or
 /// the matcher's default when the benchmark's is unlimited). Prints the table, appends one
 /// record per search and returns the rows as JSON.
 std::vector<JsonObject> benchGlobalMiss(Report& out, const MapStore& store,
