@@ -125,10 +125,9 @@ std::vector<JsonObject> benchGlobalMiss(Report& out, const MapStore& store,
         rec.failure = "global search stopped at its budget";
       } else {
         ++row.found;
-        const double n = static_cast<double>(prepared->problem.scanPoints());
         row.best_found_per_point =
             std::max(row.best_found_per_point,
-                     q.sumToLogLikelihood(g.best.score, prepared->problem.scanPoints()) / n);
+                     g.best.log_likelihood / static_cast<double>(prepared->problem.scanPoints()));
         rec.failure = "an optimum in a window without the vehicle (not matched further)";
       }
       std::fprintf(stderr, "global miss %s scan %d: %s, %.0f ms, %lld evaluations\n", name.c_str(),

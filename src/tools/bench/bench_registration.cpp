@@ -756,10 +756,8 @@ int main(int argc, char** argv) {
           search_ms.push_back((t2 - t1) * 1e3);
           evals.push_back(static_cast<double>(g.best.stats.evaluations));
           if (g.complete) {
-            const int64_t n = prepared->problem.scanPoints();
-            optimum_per_point.push_back(
-                ScoreQuantizer(gmap->options()).sumToLogLikelihood(g.best.score, n) /
-                static_cast<double>(n));
+            optimum_per_point.push_back(g.best.log_likelihood /
+                                        static_cast<double>(prepared->problem.scanPoints()));
           }
           lookups.push_back(static_cast<double>(g.point_lookups));
           poses = static_cast<double>(g.best.stats.exhaustive_poses);
