@@ -33,7 +33,9 @@ Matcher::Matcher(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& nam
       scan_rate_(0.5 * options_.expected_scan_rate_hz, 2.0 * options_.expected_scan_rate_hz),
       acquisition_(
           AcquisitionWatchOptions{acquisitionWarnAfter(options_.policy.relocalization), 15.0}) {
-  auto processor = MatchProcessor::create(options_.registration, options_.policy, options_.method);
+  // The obstacle labels wait until the pose is out (publishOutputs).
+  auto processor =
+      MatchProcessor::create(options_.registration, options_.policy, options_.method, true);
   if (!processor) throw ConfigError(processor.error());
   processor_ = std::make_unique<MatchProcessor>(std::move(processor).value());
 

@@ -236,7 +236,7 @@ void Matcher::runMatch(const sensor_msgs::PointCloud2::ConstPtr& msg, ScanInput 
                       report.stamp_s, matchOutcomeName(report.outcome),
                       priorSourceName(report.prior.source), report.reason.c_str());
   }
-  publishOutputs(report, msg->header.stamp, dropped);
+  publishOutputs(map ? *map : kEmpty, report, msg->header.stamp, dropped);
   record(report, dropped);
 }
 
@@ -256,7 +256,8 @@ void Matcher::publishSkipped(const ros::Time& stamp, const std::string& reason, 
   record(r, dropped);
 }
 
-void Matcher::publishOutputs(const MatchReport& report, const ros::Time& stamp, uint32_t dropped) {
+void Matcher::publishOutputs(const ChunkMap& map, MatchReport& report, const ros::Time& stamp,
+                             uint32_t dropped) {
   geometry_msgs::PoseWithCovarianceStamped pose;
   if (toMatchPoseMsg(report, options_.map_frame, pose)) {
     pose.header.stamp = stamp;
@@ -265,8 +266,11 @@ void Matcher::publishOutputs(const MatchReport& report, const ros::Time& stamp, 
     ROS_ERROR_THROTTLE(5.0, "%s: accepted match with a non-finite pose not published",
                        name_.c_str());
   }
+  // The status's latency is the pose's; the labels (its obstacle count) come after it.
+  const double latency_s = (ros::Time::now() - stamp).toSec();
+  processor_->labelObstacles(map, report, [] { return ros::WallTime::now().toSec(); });
   MatchStatus status;
-  toStatusMsg(report, options_.map_frame, (ros::Time::now() - stamp).toSec(), dropped, status);
+  toStatusMsg(report, options_.map_frame, latency_s, dropped, status);
   status.header.stamp = stamp;
   status_pub_.publish(status);
 

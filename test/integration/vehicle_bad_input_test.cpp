@@ -269,7 +269,6 @@ TEST(VehicleBadInput, NanImuOdometryAndInitialPoseAreDroppedWithAReason) {
   const long before = diagnosticCount(kEkfFilter, "invalid inputs");
   ASSERT_GE(before, 0) << "no 'invalid inputs' in the EKF's filter diagnostic";
   const double wall = wallNow();
-  const ros::Time from = clockNow();
   const double nan = std::nan("");
   for (int i = 0; i < 3; ++i) {
     reach(player->elapsed() + 0.1);

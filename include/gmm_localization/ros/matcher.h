@@ -129,7 +129,10 @@ class Matcher {
   /// The status of a scan whose processing threw (counted in the diagnostics).
   void publishFailure(const sensor_msgs::PointCloud2::ConstPtr& msg, const std::string& reason,
                       uint32_t dropped);
-  void publishOutputs(const MatchReport& report, const ros::Time& stamp, uint32_t dropped);
+  /// The pose first; then the obstacle labels (MatchProcessor::labelObstacles, on `map`), the
+  /// status and the debug outputs.
+  void publishOutputs(const ChunkMap& map, MatchReport& report, const ros::Time& stamp,
+                      uint32_t dropped);
   // matcher_diagnostics.cpp
   void setupDiagnostics();
   void record(const MatchReport& report, uint32_t dropped);

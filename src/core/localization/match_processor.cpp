@@ -60,17 +60,39 @@ std::string MatchMethodOptions::validate() const {
 
 Result<MatchProcessor> MatchProcessor::create(const RegistrationOptions& registration,
                                               const LocalizationPolicyOptions& policy,
-                                              const MatchMethodOptions& method) {
+                                              const MatchMethodOptions& method,
+                                              bool defer_obstacles) {
   std::string e = registration.validate();
   if (!e.empty()) return Result<MatchProcessor>::failure("registration: " + e);
   e = policy.validate();
   if (!e.empty()) return Result<MatchProcessor>::failure("policy: " + e);
   e = method.validate();
   if (!e.empty()) return Result<MatchProcessor>::failure("method: " + e);
-  RegistrationOptions unknown_z = registration;
+  // Deferred labels: the registrations leave them out, labelObstacles() adds them.
+  const bool deferred = defer_obstacles && registration.classify_obstacles &&
+                        method.method != MatchMethod::kReflectivity;
+  RegistrationOptions tracking = registration;
+  tracking.classify_obstacles = registration.classify_obstacles && !deferred;
+  RegistrationOptions unknown_z = tracking;
   unknown_z.z_search_m = std::max(registration.z_search_m, policy.window.unknown_z_search_m);
-  return MatchProcessor(registration, unknown_z, reflectivityRegistrationOptions(registration),
-                        policy, method);
+  return MatchProcessor(registration, tracking, unknown_z,
+                        reflectivityRegistrationOptions(registration), policy, method, deferred);
+}
+
+void MatchProcessor::labelObstacles(const ChunkMap& map, MatchReport& report,
+                                    const std::function<double()>& now) const {
+  if (!deferred_labels_ || !report.has_result ||
+      report.result.obstacles.label.size() == report.points.size()) {
+    return;
+  }
+  const double t0 = now ? now() : 0.0;
+  report.result.obstacles = classifyObstacles(map, report.points, report.result.pose,
+                                              options_.obstacles, tracking_.pool().get());
+  if (now) {
+    const double dt = now() - t0;
+    report.timing.obstacles_s += dt;
+    report.total_s += dt;
+  }
 }
 
 MatchReport MatchProcessor::process(const ChunkMap& map, ScanInput scan, const Prior& prior,

@@ -110,9 +110,12 @@ struct MatchMethodOptions {
 class MatchProcessor {
  public:
   /// Validates the option sets; the reason names the offending key.
+  /// `defer_obstacles`: process() leaves the obstacle labels (paper V-C, RegistrationOptions::
+  /// classify_obstacles) to labelObstacles(), so that a caller can publish the pose first.
   static Result<MatchProcessor> create(const RegistrationOptions& registration,
                                        const LocalizationPolicyOptions& policy,
-                                       const MatchMethodOptions& method = {});
+                                       const MatchMethodOptions& method = {},
+                                       bool defer_obstacles = false);
 
   /// Processes one scan (moved in, deskewed in place, returned in the report's `points`). `twist`:
   /// the body twist for deskewing (null: no deskewing). `want_traversal`: record the search
@@ -128,25 +131,40 @@ class MatchProcessor {
                       const ChunkMap* reflectivity_map = nullptr,
                       const std::atomic<bool>* cancel = nullptr) const;
 
-  const RegistrationOptions& registrationOptions() const { return tracking_.options(); }
+  /// With defer_obstacles: labels the points of `report` at its registration's pose, as
+  /// process() would have (the same labels and counts), and adds the time to its timing and
+  /// total (when `now` is given). Nothing without a result, for the reflectivity method (which
+  /// labels nothing), with classify_obstacles off or when process() labelled them already.
+  void labelObstacles(const ChunkMap& map, MatchReport& report,
+                      const std::function<double()>& now = nullptr) const;
+
+  /// The options the scans are registered with (classify_obstacles as given to create(), also
+  /// when the labels are deferred).
+  const RegistrationOptions& registrationOptions() const { return options_; }
   const LocalizationPolicyOptions& policyOptions() const { return policy_; }
   const MatchMethodOptions& methodOptions() const { return method_; }
 
  private:
-  MatchProcessor(const RegistrationOptions& tracking, const RegistrationOptions& unknown_z,
-                 const RegistrationOptions& reflectivity, const LocalizationPolicyOptions& policy,
-                 const MatchMethodOptions& method)
-      : tracking_(tracking),
+  MatchProcessor(const RegistrationOptions& options, const RegistrationOptions& tracking,
+                 const RegistrationOptions& unknown_z, const RegistrationOptions& reflectivity,
+                 const LocalizationPolicyOptions& policy, const MatchMethodOptions& method,
+                 bool deferred_labels)
+      : options_(options),
+        tracking_(tracking),
         unknown_z_(unknown_z, tracking_.pool(), tracking_.globalPool()),
         reflectivity_(reflectivity, tracking_.pool(), tracking_.globalPool()),
         policy_(policy),
-        method_(method) {}
+        method_(method),
+        deferred_labels_(deferred_labels) {}
+
+  RegistrationOptions options_;  ///< as given (the registrations' may leave the labels out)
 
   Registration tracking_;      ///< prior height known
   Registration unknown_z_;     ///< wider height pre-alignment (planar initial pose)
   Registration reflectivity_;  ///< the reflectivity layer (x, y, heading)
   LocalizationPolicyOptions policy_;
   MatchMethodOptions method_;
+  bool deferred_labels_ = false;  ///< process() leaves the labels to labelObstacles()
 };
 
 }  // namespace gmm_localization
