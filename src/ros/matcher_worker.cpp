@@ -13,6 +13,11 @@
 namespace gmm_localization {
 namespace node {
 
+namespace {
+/// The clock of a match's stage timings [s].
+double wallSeconds() { return ros::WallTime::now().toSec(); }
+}  // namespace
+
 void Matcher::onScan(const sensor_msgs::PointCloud2::ConstPtr& msg) {
   scan_rate_.tick();
   // Time going backwards (a looping bag): the session forgets the state of the other timeline
@@ -211,9 +216,9 @@ void Matcher::runMatch(const sensor_msgs::PointCloud2::ConstPtr& msg, ScanInput 
   }
   static const ChunkMap kEmpty;
   const bool want_traversal = traversal_pub_.getNumSubscribers() > 0;
-  MatchReport report = processor_->process(
-      map ? *map : kEmpty, std::move(scan), start.prior, start.twistOrNull(), want_traversal,
-      [] { return ros::WallTime::now().toSec(); }, reflectivity.get(), cancel);
+  MatchReport report =
+      processor_->process(map ? *map : kEmpty, std::move(scan), start.prior, start.twistOrNull(),
+                          want_traversal, wallSeconds, reflectivity.get(), cancel);
   if (fused && !reflectivity && report.outcome == MatchOutcome::kSkipped &&
       report.reason.rfind("no reflectivity map", 0) == 0) {
     report.reason = "method fused: " + reflectivity_problem;
@@ -268,7 +273,7 @@ void Matcher::publishOutputs(const ChunkMap& map, MatchReport& report, const ros
   }
   // The status's latency is the pose's; the labels (its obstacle count) come after it.
   const double latency_s = (ros::Time::now() - stamp).toSec();
-  processor_->labelObstacles(map, report, [] { return ros::WallTime::now().toSec(); });
+  processor_->labelObstacles(map, report, wallSeconds);
   MatchStatus status;
   toStatusMsg(report, options_.map_frame, latency_s, dropped, status);
   status.header.stamp = stamp;

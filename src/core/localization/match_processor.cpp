@@ -72,7 +72,7 @@ Result<MatchProcessor> MatchProcessor::create(const RegistrationOptions& registr
   const bool deferred = defer_obstacles && registration.classify_obstacles &&
                         method.method != MatchMethod::kReflectivity;
   RegistrationOptions tracking = registration;
-  tracking.classify_obstacles = registration.classify_obstacles && !deferred;
+  if (deferred) tracking.classify_obstacles = false;
   RegistrationOptions unknown_z = tracking;
   unknown_z.z_search_m = std::max(registration.z_search_m, policy.window.unknown_z_search_m);
   return MatchProcessor(registration, tracking, unknown_z,
